@@ -248,6 +248,23 @@ class RosenbrockTableau(NamedTuple):
         """Number of stages ``s``."""
         return int(self.a.shape[0])
 
+    @property
+    def b(self) -> FloatArray:
+        """Solution weights: ``y1 = y0 + sum_j b[j] k_j`` (stiffly accurate form).
+
+        The last stage's argument plus its increment: ``b = a[s-1] + e_{s-1}``.
+        """
+        w = self.a[-1].copy()
+        w[-1] += 1.0
+        return w
+
+    @property
+    def b_err(self) -> FloatArray:
+        """Error weights: ``err = sum_j b_err[j] k_j = k_{s-1}`` (y1 minus the embedded solution)."""
+        w = np.zeros(self.a.shape[0])
+        w[-1] = 1.0
+        return w
+
 
 # ---------------------------------------------------------------------------
 # Dormand-Prince 5(4)

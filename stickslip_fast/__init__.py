@@ -1,0 +1,36 @@
+"""stickslip_fast: a Numba-accelerated bifurcation engine for stick-slip oscillators.
+
+Models the coupled translational-rotational disks-on-belts system of Kudra et al.
+(smooth Contensou-Pade friction with static > kinetic friction, constant belt or
+a shared DC motor), integrates it with compiled stiff and explicit solvers, and
+records Poincare points at the local minima of x_1.
+
+Main entry points: :class:`System`, :func:`simulate`.
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .poincare import STATUS_NAMES
+from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
+from .system import PRESETS, SWEEPABLE, System
+from .trajectory import METHODS
+
+try:
+    __version__ = version("stickslip_fast")
+except PackageNotFoundError:  # running from a source tree
+    __version__ = "0.0.0+unknown"
+
+__all__ = [
+    "System",
+    "simulate",
+    "SimulationResult",
+    "METHODS",
+    "STATUS_NAMES",
+    "PRESETS",
+    "SWEEPABLE",
+    "DEFAULT_RTOL",
+    "DEFAULT_ATOL",
+    "__version__",
+]

@@ -1,0 +1,158 @@
+"""Command line: ``stickslip-fast simulate | sweep | info``.
+
+A thin layer over the public API: it parses a TOML config (see
+:mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
+:func:`sweep`, and prints or writes the results.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+import numpy as np
+
+from .config import ConfigError, RunConfig, load_config, parse_config
+from .system import PRESETS
+
+__all__ = ["main"]
+
+
+def _parse_value(text: str) -> Any:
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _config_from_args(args: argparse.Namespace) -> RunConfig:
+    """A config file (if given) with the command-line overrides applied on top."""
+    data: dict[str, Any] = {}
+    if args.config:
+        base = load_config(args.config)
+        data = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.raw.items()}
+    system = data.setdefault("system", {})
+    if args.preset:
+        system.clear()
+        system["preset"] = args.preset
+    elif not args.config:
+        system["preset"] = "asymmetric"
+    for name in ("eta", "drive", "n_oscillators"):
+        value = getattr(args, name)
+        if value is not None:
+            system[name] = value
+    for item in args.set or []:
+        if "=" not in item:
+            raise ConfigError(f"--set expects KEY=VALUE, got {item!r}")
+        key, value = item.split("=", 1)
+        system[key.strip()] = _parse_value(value.strip())
+    integ = data.setdefault("integration", {})
+    for name in ("t_end", "t_transient", "method", "rtol", "atol", "h", "max_points"):
+        value = getattr(args, name, None)
+        if value is not None:
+            integ[name] = value
+    integ.setdefault("t_end", 3000.0)
+    integ.setdefault("t_transient", 2000.0 if integ["t_end"] > 2000.0 else 0.0)
+    if getattr(args, "sample_dt", None) is not None:
+        data.setdefault("simulate", {})["sample_dt"] = args.sample_dt
+    return parse_config(data, source=args.config or "<command line>")
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("config", nargs="?", help="TOML configuration file (see docs/configs.md)")
+    p.add_argument("--preset", choices=sorted(PRESETS), help="parameter set (default: asymmetric)")
+    p.add_argument("--eta", type=float, help="static/kinetic friction ratio eta in [1, 10]")
+    p.add_argument("--drive", choices=["constant", "dc-motor"])
+    p.add_argument("--n-oscillators", dest="n_oscillators", type=int)
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a System field")
+    p.add_argument("--t-end", dest="t_end", type=float)
+    p.add_argument("--t-transient", dest="t_transient", type=float)
+    p.add_argument("--method", choices=["rodas5p", "dopri5", "dopri5-fixed"])
+    p.add_argument("--rtol", type=float)
+    p.add_argument("--atol", type=float)
+    p.add_argument("--h", type=float, help="fixed step (dopri5-fixed)")
+    p.add_argument("--max-points", dest="max_points", type=int)
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from .simulate import simulate
+
+    cfg = _config_from_args(args)
+    res = simulate(cfg.system, y0=cfg.y0, sample_dt=cfg.sample_dt, **cfg.integration)
+    if args.json:
+        out = {
+            "system": cfg.system.to_dict(),
+            "settings": res.settings,
+            "status": res.status,
+            "period": res.period,
+            "n_steps": res.n_steps,
+            "n_rejected": res.n_rejected,
+            "n_crossings": res.n_crossings,
+            "state_names": res.state_names,
+            "t_poincare": res.t_poincare.tolist(),
+            "poincare": res.poincare.tolist(),
+        }
+        json.dump(out, sys.stdout, indent=1)
+        print()
+        return 0
+    s = cfg.system
+    print(f"# {cfg.title or 'simulate'}")
+    print(
+        f"# drive={s.drive} N={s.n_oscillators} eta={s.eta:g} m={s.m:g} k12={s.k12:g} "
+        f"mu={s.mu:g} eps={s.eps:g} method={res.method} rtol={res.settings['rtol']:g}"
+    )
+    print(
+        f"# t_end={res.settings['t_end']:g} t_transient={res.settings['t_transient']:g} "
+        f"steps={res.n_steps} rejected={res.n_rejected} crossings={res.n_crossings}"
+    )
+    print(f"status: {res.status}")
+    print(f"period: {res.period if res.period else 'none detected (0)'}")
+    shown = args.show
+    pts = res.poincare[-shown:] if shown else res.poincare[:0]
+    tp = res.t_poincare[-shown:] if shown else res.t_poincare[:0]
+    if len(pts):
+        print(f"Poincare points (local minima of x1), last {len(pts)} of {len(res.t_poincare)}:")
+        cols = ["t"] + res.state_names
+        print("  ".join(f"{c:>14s}" for c in cols))
+        for t, row in zip(tp, pts):
+            print("  ".join(f"{v:14.8g}" for v in np.concatenate([[t], row])))
+    if args.save:
+        np.savez(args.save, t_poincare=res.t_poincare, poincare=res.poincare,
+                 state_names=np.array(res.state_names), t=res.t if res.t is not None else [],
+                 y=res.y if res.y is not None else [])  # fmt: skip
+        print(f"saved {args.save}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="stickslip-fast",
+        description="Bifurcation engine for coupled translational-rotational stick-slip oscillators.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("simulate", help="one trajectory: Poincare points and period")
+    _add_common(p)
+    p.add_argument("--sample-dt", dest="sample_dt", type=float, help="also sample a time grid")
+    p.add_argument("--show", type=int, default=12, help="how many points to print (default 12)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--save", metavar="FILE.npz", help="save points and samples to an .npz file")
+    p.set_defaults(func=_cmd_simulate)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ConfigError, ValueError) as exc:
+        print(f"stickslip-fast: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

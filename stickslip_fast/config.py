@@ -1,0 +1,257 @@
+"""TOML run configurations: one file describes a simulation or a sweep.
+
+Layout (every section optional except what the command needs)::
+
+    title = "Fig. 6: asymmetric springs, constant belt"
+    notes = "free text kept in the result file"
+
+    [system]              # a preset plus overrides, or every field spelled out
+    preset = "asymmetric"
+    eta = 1.5
+    drive = "constant"
+    n_oscillators = 1
+
+    [initial]             # at most one of these; default: the zero state
+    y0 = [0.0, 0.0, 0.0, 0.0]                     # state layout x1, dx1, phi1, dphi1, ...
+    # y0_paper = [x1, x2, dx1, dx2, phi1, phi2, dphi1, dphi2]   (the paper's N = 2 order)
+    # vb = 0.0            # DC motor: initial belt speed when y0_paper is used
+
+    [integration]
+    t_end = 3000.0
+    t_transient = 2000.0
+    method = "rodas5p"    # rodas5p | dopri5 | dopri5-fixed
+    rtol = 1e-8
+    atol = 1e-10
+    # h = 1e-5            # fixed step (dopri5-fixed)
+    max_points = 256
+
+    [simulate]
+    sample_dt = 0.05
+
+    [sweep]
+    param = "eta"                                  # or ["eta", "k12"]
+    values = { start = 1.0, stop = 10.0, num = 1000 }   # or a list; 2-D: a list of two
+    mode = "restart"                               # restart | continuation | continuation-both
+    chunk_size = 64
+
+Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .system import System
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["ConfigError", "RunConfig", "load_config", "parse_config", "paper_order_to_state"]
+
+_SECTIONS = {
+    "title": None,
+    "notes": None,
+    "system": None,  # keys checked by System
+    "initial": {"y0", "y0_paper", "vb"},
+    "integration": {
+        "t_end", "t_transient", "method", "rtol", "atol", "h", "max_points", "max_steps",
+        "equilibrium_tol", "period_tol",
+    },
+    "simulate": {"sample_dt"},
+    "sweep": {"param", "values", "mode", "chunk_size"},
+}  # fmt: skip
+
+
+class ConfigError(ValueError):
+    """A configuration file has an unknown key or a bad value (the message names it)."""
+
+
+@dataclass
+class RunConfig:
+    """A parsed configuration; see the module docstring for the file layout."""
+
+    system: System
+    integration: dict[str, Any]
+    y0: np.ndarray | None = None
+    sample_dt: float | None = None
+    sweep: dict[str, Any] | None = None
+    title: str = ""
+    notes: str = ""
+    source: str = ""
+    raw: dict[str, Any] = field(default_factory=dict)
+
+
+def paper_order_to_state(values: Any, n_oscillators: int, vb: float | None) -> np.ndarray:
+    """Convert the paper's (x1..xN, dx1..dxN, phi1..phiN, dphi1..dphiN) order.
+
+    The paper writes initial conditions for N = 2 as
+    (x1, x2, dx1, dx2, phi1, phi2, dphi1, dphi2); the engine's state is grouped
+    per disk (x1, dx1, phi1, dphi1, x2, ...). ``vb`` appends the DC motor's
+    initial belt speed.
+    """
+    arr = np.asarray(values, dtype=float)
+    n = n_oscillators
+    if arr.shape != (4 * n,):
+        raise ConfigError(f"initial.y0_paper must have {4 * n} entries, got {arr.size}")
+    out = arr.reshape(4, n).T.reshape(-1)
+    if vb is not None:
+        out = np.append(out, float(vb))
+    return out
+
+
+def _values_from_spec(spec: Any, key: str) -> np.ndarray:
+    if isinstance(spec, dict):
+        unknown = sorted(set(spec) - {"start", "stop", "num"})
+        if unknown or not {"start", "stop", "num"} <= set(spec):
+            raise ConfigError(
+                f"{key} must be a list or {{start, stop, num}}, got keys {sorted(spec)}"
+            )
+        num = spec["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise ConfigError(f"{key}.num must be an integer >= 1, got {num!r}")
+        return np.linspace(float(spec["start"]), float(spec["stop"]), num)
+    if isinstance(spec, list) and spec:
+        try:
+            return np.asarray(spec, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"{key} must hold numbers: {exc}") from None
+    raise ConfigError(f"{key} must be a non-empty list or {{start, stop, num}}, got {spec!r}")
+
+
+def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
+    """Validate a configuration mapping (as read from TOML)."""
+    for section, value in data.items():
+        if section not in _SECTIONS:
+            raise ConfigError(f"unknown section or key {section!r}; allowed: {sorted(_SECTIONS)}")
+        allowed = _SECTIONS[section]
+        if allowed is not None:
+            if not isinstance(value, dict):
+                raise ConfigError(f"[{section}] must be a table")
+            unknown = sorted(set(value) - allowed)
+            if unknown:
+                raise ConfigError(
+                    f"unknown key(s) {unknown} in [{section}]; allowed: {sorted(allowed)}"
+                )
+
+    sys_table = dict(data.get("system", {}))
+    if not isinstance(data.get("system", {}), dict):
+        raise ConfigError("[system] must be a table")
+    preset = sys_table.pop("preset", None)
+    try:
+        system = System.preset(preset, **sys_table) if preset else System.from_dict(sys_table)
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"[system]: {exc}") from None
+
+    initial = data.get("initial", {})
+    y0 = None
+    if "y0" in initial and "y0_paper" in initial:
+        raise ConfigError("[initial]: give y0 or y0_paper, not both")
+    if "vb" in initial and "y0_paper" not in initial:
+        raise ConfigError("[initial].vb is only used with y0_paper (y0 includes vb)")
+    try:
+        if "y0" in initial:
+            y0 = system.initial_state(initial["y0"])
+        elif "y0_paper" in initial:
+            vb = initial.get("vb", 0.0 if system.is_dc_motor else None)
+            if vb is not None and not system.is_dc_motor:
+                raise ConfigError("[initial].vb needs drive = 'dc-motor'")
+            y0 = system.initial_state(
+                paper_order_to_state(initial["y0_paper"], system.n_oscillators, vb)
+            )
+    except ConfigError:
+        raise
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"[initial]: {exc}") from None
+
+    integration = dict(data.get("integration", {}))
+    for key, value in integration.items():
+        want_int = key in ("max_points", "max_steps")
+        if key == "method":
+            ok = isinstance(value, str)
+        else:
+            ok = not isinstance(value, bool) and isinstance(
+                value, int if want_int else (int, float)
+            )
+        if not ok:
+            kind = "a string" if key == "method" else "an integer" if want_int else "a number"
+            raise ConfigError(f"[integration].{key} must be {kind}, got {value!r}")
+
+    sample_dt = data.get("simulate", {}).get("sample_dt")
+    if sample_dt is not None and (
+        isinstance(sample_dt, bool) or not isinstance(sample_dt, (int, float)) or sample_dt <= 0
+    ):
+        raise ConfigError(f"[simulate].sample_dt must be a number > 0, got {sample_dt!r}")
+
+    sweep = None
+    if "sweep" in data:
+        sw = dict(data["sweep"])
+        if "param" not in sw or "values" not in sw:
+            raise ConfigError("[sweep] needs 'param' and 'values'")
+        param = sw["param"]
+        if isinstance(param, list):
+            if len(param) != 2 or not all(isinstance(p, str) for p in param):
+                raise ConfigError(
+                    f"[sweep].param must be a name or a list of two names, got {param!r}"
+                )
+            vals = sw["values"]
+            if not isinstance(vals, list) or len(vals) != 2:
+                raise ConfigError(
+                    "[sweep].values must be a list of two value specs for a 2-D sweep"
+                )
+            values: Any = tuple(
+                _values_from_spec(v, f"[sweep].values[{i}]") for i, v in enumerate(vals)
+            )
+            param = tuple(param)
+        elif isinstance(param, str):
+            values = _values_from_spec(sw["values"], "[sweep].values")
+        else:
+            raise ConfigError(f"[sweep].param must be a string, got {param!r}")
+        sweep = {"param": param, "values": values}
+        if "mode" in sw:
+            if not isinstance(sw["mode"], str):
+                raise ConfigError(f"[sweep].mode must be a string, got {sw['mode']!r}")
+            sweep["mode"] = sw["mode"]
+        if "chunk_size" in sw:
+            cs = sw["chunk_size"]
+            if isinstance(cs, bool) or not isinstance(cs, int) or cs < 1:
+                raise ConfigError(f"[sweep].chunk_size must be an integer >= 1, got {cs!r}")
+            sweep["chunk_size"] = cs
+
+    title = data.get("title", "")
+    notes = data.get("notes", "")
+    if not isinstance(title, str) or not isinstance(notes, str):
+        raise ConfigError("title and notes must be strings")
+    return RunConfig(
+        system=system,
+        integration=integration,
+        y0=y0,
+        sample_dt=None if sample_dt is None else float(sample_dt),
+        sweep=sweep,
+        title=title,
+        notes=notes,
+        source=source,
+        raw=data,
+    )
+
+
+def load_config(path: str | Path) -> RunConfig:
+    """Read and validate a TOML configuration file."""
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"config file not found: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: invalid TOML: {exc}") from None
+    try:
+        return parse_config(data, source=str(path))
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None

@@ -1,0 +1,212 @@
+"""The paper's model: smooth Contensou-Pade friction, right-hand side, analytic Jacobian.
+
+This module is the single source of the equations; every integrator calls it.
+
+State layout (see :attr:`System.state_names`): disk i occupies slots
+``4 i .. 4 i + 3`` as (x_i, dx_i, phi_i, dphi_i); the DC motor's belt speed v_b
+is the last slot. Per disk (paper Eq. 15, nondimensional)::
+
+    x''   = -(c x' + c12 phi') - (x + k12 phi) - mu T_s(x' - v_b, phi', eps)
+    m phi'' = -(c12 x' + c phi') - (k12 x + phi) - mu M_s(x' - v_b, phi', eps)
+    T_b v_b' = v_b0 - v_b + (beta / N) sum_i T_s(x_i' - v_b, phi_i', eps)   (DC motor)
+
+The Jacobian is stored in bordered block-diagonal form: N dense 4x4 blocks,
+plus (DC motor only) a border column d f_i / d v_b, a border row
+d f_vb / d y_i and a corner d f_vb / d v_b. See :mod:`stickslip_fast.linalg`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .system import (
+    ETA_MAX,
+    ETA_MIN,
+    P_BETA,
+    P_C,
+    P_C12,
+    P_EPS,
+    P_ETAP,
+    P_K12,
+    P_M,
+    P_MU,
+    P_TB,
+    P_VB,
+    P_VB0,
+)
+
+__all__ = [
+    "eta_prime",
+    "friction",
+    "friction_partials",
+    "rhs",
+    "jacobian_blocks",
+    "dense_jacobian",
+]
+
+_JIT = dict(cache=True, nogil=True)
+
+
+@njit(**_JIT)
+def eta_prime(eta: float) -> float:
+    """The paper's cubic fit eta'(eta) on [1, 1.3], [1.3, 2.7], [2.7, 10].
+
+    Returns NaN outside [1, 10]: the fit is not extrapolated (System rejects such eta).
+    """
+    if eta < ETA_MIN or eta > ETA_MAX or not math.isfinite(eta):
+        return math.nan
+    if eta <= 1.3:
+        return -13.607 + eta * (30.893 + eta * (-22.01 + eta * 5.878))
+    if eta <= 2.7:
+        return -2.41 + eta * (3.985 + eta * (-0.3581 + eta * 0.0493))
+    return -1.684 + eta * (3.121 + eta * (-0.00483 + eta * 0.000196))
+
+
+@njit(**_JIT)
+def friction(v: float, w: float, eps: float, etap: float) -> tuple[float, float]:
+    """Friction force T_s and torque M_s for slip velocity v and spin w.
+
+    T_s = v g, M_s = (2/3) w g with g = s^(-1/2) + eta' eps^3 / s^2 and
+    s = v^2 + w^2 + eps^2 (the paper's Eq. 2).
+    """
+    s = v * v + w * w + eps * eps
+    g = 1.0 / math.sqrt(s) + etap * eps * eps * eps / (s * s)
+    return v * g, (2.0 / 3.0) * w * g
+
+
+@njit(**_JIT)
+def friction_partials(v: float, w: float, eps: float, etap: float):
+    """T_s, M_s and their partial derivatives (T_v, T_w, M_v, M_w).
+
+    With h = dg/ds * 2 = -s^(-3/2) - 4 eta' eps^3 / s^3, dg/dv = v h and dg/dw = w h.
+    """
+    s = v * v + w * w + eps * eps
+    inv_sqrt = 1.0 / math.sqrt(s)
+    e3 = etap * eps * eps * eps
+    g = inv_sqrt + e3 / (s * s)
+    h = -inv_sqrt * inv_sqrt * inv_sqrt - 4.0 * e3 / (s * s * s)
+    t = v * g
+    mm = (2.0 / 3.0) * w * g
+    t_v = g + v * v * h
+    t_w = v * w * h
+    m_v = (2.0 / 3.0) * w * v * h
+    m_w = (2.0 / 3.0) * (g + w * w * h)
+    return t, mm, t_v, t_w, m_v, m_w
+
+
+@njit(**_JIT)
+def rhs(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool, dydt: np.ndarray) -> None:
+    """Write dy/dt into ``dydt`` (no allocation)."""
+    m = p[P_M]
+    k12 = p[P_K12]
+    c = p[P_C]
+    c12 = p[P_C12]
+    mu = p[P_MU]
+    eps = p[P_EPS]
+    etap = p[P_ETAP]
+    vb = y[4 * n_osc] if dc else p[P_VB]
+    t_sum = 0.0
+    for i in range(n_osc):
+        j = 4 * i
+        x = y[j]
+        dx = y[j + 1]
+        ph = y[j + 2]
+        dph = y[j + 3]
+        t, mm = friction(dx - vb, dph, eps, etap)
+        t_sum += t
+        dydt[j] = dx
+        dydt[j + 1] = -(c * dx + c12 * dph) - (x + k12 * ph) - mu * t
+        dydt[j + 2] = dph
+        dydt[j + 3] = (-(c12 * dx + c * dph) - (k12 * x + ph) - mu * mm) / m
+    if dc:
+        dydt[4 * n_osc] = (p[P_VB0] - vb + p[P_BETA] / n_osc * t_sum) / p[P_TB]
+
+
+@njit(**_JIT)
+def jacobian_blocks(
+    y: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    blocks: np.ndarray,
+    border_col: np.ndarray,
+    border_row: np.ndarray,
+) -> float:
+    """Analytic Jacobian in bordered block-diagonal form.
+
+    Fills ``blocks`` (N, 4, 4) with d f_i / d y_i and, for the DC motor,
+    ``border_col`` (N, 4) with d f_i / d v_b and ``border_row`` (N, 4) with
+    d f_vb / d y_i. Returns the corner d f_vb / d v_b (0.0 for a constant belt).
+    """
+    m = p[P_M]
+    k12 = p[P_K12]
+    c = p[P_C]
+    c12 = p[P_C12]
+    mu = p[P_MU]
+    eps = p[P_EPS]
+    etap = p[P_ETAP]
+    vb = y[4 * n_osc] if dc else p[P_VB]
+    inv_m = 1.0 / m
+    corner = 0.0
+    if dc:
+        inv_tb = 1.0 / p[P_TB]
+        bn = p[P_BETA] / n_osc * inv_tb
+        corner = -inv_tb
+    for i in range(n_osc):
+        j = 4 * i
+        _, _, t_v, t_w, m_v, m_w = friction_partials(y[j + 1] - vb, y[j + 3], eps, etap)
+        b = blocks[i]
+        b[0, 0] = 0.0
+        b[0, 1] = 1.0
+        b[0, 2] = 0.0
+        b[0, 3] = 0.0
+        b[1, 0] = -1.0
+        b[1, 1] = -c - mu * t_v
+        b[1, 2] = -k12
+        b[1, 3] = -c12 - mu * t_w
+        b[2, 0] = 0.0
+        b[2, 1] = 0.0
+        b[2, 2] = 0.0
+        b[2, 3] = 1.0
+        b[3, 0] = -k12 * inv_m
+        b[3, 1] = (-c12 - mu * m_v) * inv_m
+        b[3, 2] = -inv_m
+        b[3, 3] = (-c - mu * m_w) * inv_m
+        if dc:
+            # slip velocity is dx - vb, so d/dvb = -d/d(dx)
+            border_col[i, 0] = 0.0
+            border_col[i, 1] = mu * t_v
+            border_col[i, 2] = 0.0
+            border_col[i, 3] = mu * m_v * inv_m
+            border_row[i, 0] = 0.0
+            border_row[i, 1] = bn * t_v
+            border_row[i, 2] = 0.0
+            border_row[i, 3] = bn * t_w
+            corner -= bn * t_v
+    return corner
+
+
+@njit(**_JIT)
+def dense_jacobian(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool) -> np.ndarray:
+    """The full (n_state, n_state) Jacobian, assembled from :func:`jacobian_blocks`.
+
+    For tests and for external solvers; the integrators never form it.
+    """
+    n = y.size
+    blocks = np.empty((n_osc, 4, 4))
+    col = np.zeros((n_osc, 4))
+    row = np.zeros((n_osc, 4))
+    corner = jacobian_blocks(y, p, n_osc, dc, blocks, col, row)
+    jac = np.zeros((n, n))
+    for i in range(n_osc):
+        j = 4 * i
+        jac[j : j + 4, j : j + 4] = blocks[i]
+        if dc:
+            jac[j : j + 4, n - 1] = col[i]
+            jac[n - 1, j : j + 4] = row[i]
+    if dc:
+        jac[n - 1, n - 1] = corner
+    return jac
