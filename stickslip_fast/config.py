@@ -20,8 +20,8 @@ Layout (every section optional except what the command needs)::
     t_end = 3000.0
     t_transient = 2000.0
     method = "rodas5p"    # rodas5p | dopri5 | dopri5-fixed
-    rtol = 1e-8
-    atol = 1e-10
+    rtol = 1e-9
+    atol = 1e-11
     # h = 1e-5            # fixed step (dopri5-fixed)
     max_points = 256
 
