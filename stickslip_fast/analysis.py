@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from .integrators import initial_step
+from .integrators import accepted_step_factor, initial_step, rejected_step_factor
 from .linalg import w_factor, w_solve
 from .model import eta_prime, friction_partials, friction_second_partials, jacobian_blocks
 from .poincare import ST_MAX_STEPS, ST_NONFINITE, ST_OK, ST_UNDERFLOW, STATUS_NAMES
@@ -75,12 +75,6 @@ _RB_B = RODAS5P.b
 _RB_E = RODAS5P.b_err
 _RB_Q = RODAS5P.embedded_order + 1.0
 
-# step-size control, as in trajectory.integrate
-_SAFETY = 0.9
-_FAC_MIN = 0.2
-_FAC_MAX = 6.0
-_PI_ALPHA = 0.7
-_PI_BETA = 0.4
 # renormalise early (without recording) when |u| leaves [1/_BIG, _BIG]
 _BIG = 1e100
 
@@ -380,11 +374,7 @@ def lyapunov_kernel(
                 ok = False
         if not ok or en > 1.0:
             n_rej += 1
-            if ok:
-                fac = max(_FAC_MIN, _SAFETY * en ** (-1.0 / _RB_Q))
-            else:
-                fac = 0.25
-            h *= fac
+            h *= rejected_step_factor(en, ok, _RB_Q)
             last_rejected = True
             if h < 1e-14 * max(1.0, abs(t)):
                 status = ST_UNDERFLOW if ok else ST_NONFINITE
@@ -424,13 +414,8 @@ def lyapunov_kernel(
                 u[i] /= un
         tangent_rhs(y, u, p, n_osc, dc, fy0, fu0)
         jac_fresh = False
-        en = max(en, 1e-10)
-        fac = _SAFETY * en ** (-_PI_ALPHA / _RB_Q) * err_prev ** (_PI_BETA / _RB_Q)
-        fac = min(_FAC_MAX, max(_FAC_MIN, fac))
-        if last_rejected:
-            fac = min(fac, 1.0)
-        h *= fac
-        err_prev = en
+        h *= accepted_step_factor(en, err_prev, _RB_Q, last_rejected)
+        err_prev = max(en, 1e-10)
         last_rejected = False
 
     for i in range(n):

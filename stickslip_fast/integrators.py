@@ -69,6 +69,35 @@ def initial_step(y0, f0, p, n_osc, dc, rtol, atol, order, work, fwork) -> float:
     return min(100.0 * h0, h1)
 
 
+# ------------------------------------------------------------------ step control
+# PI controller (Gustafsson; Hairer-Wanner IV.2). q is the order of the error
+# estimate plus one. Shared by every adaptive kernel.
+STEP_SAFETY = 0.9
+STEP_FAC_MIN = 0.2
+STEP_FAC_MAX = 6.0
+PI_ALPHA = 0.7
+PI_BETA = 0.4
+
+
+@njit(**_JIT)
+def rejected_step_factor(en: float, finite: bool, q: float) -> float:
+    """Step-size factor after a rejected step (error norm ``en`` > 1, or a non-finite stage)."""
+    if not finite:
+        return 0.25
+    return max(STEP_FAC_MIN, STEP_SAFETY * en ** (-1.0 / q))
+
+
+@njit(**_JIT)
+def accepted_step_factor(en: float, err_prev: float, q: float, after_reject: bool) -> float:
+    """PI step-size factor after an accepted step; no growth right after a rejection."""
+    en = max(en, 1e-10)
+    fac = STEP_SAFETY * en ** (-PI_ALPHA / q) * err_prev ** (PI_BETA / q)
+    fac = min(STEP_FAC_MAX, max(STEP_FAC_MIN, fac))
+    if after_reject:
+        fac = min(fac, 1.0)
+    return fac
+
+
 # --------------------------------------------------------------------------- ERK
 @njit(**_JIT)
 def erk_step(A, b, b_err, P, y0, h, p, n_osc, dc, K, ytmp, y1, err, D) -> None:
@@ -222,5 +251,7 @@ __all__ = [
     "dense_state",
     "error_norm",
     "initial_step",
+    "rejected_step_factor",
+    "accepted_step_factor",
     "jacobian_blocks",
 ]

@@ -17,10 +17,12 @@ from numba import njit, prange
 from .integrators import (
     DENSE_HERMITE,
     DENSE_POLY,
+    accepted_step_factor,
     dense_state,
     erk_step,
     error_norm,
     initial_step,
+    rejected_step_factor,
     rosenbrock_step,
 )
 from .model import eta_prime, jacobian_blocks, rhs
@@ -53,13 +55,6 @@ _RK_B = DOPRI5.b
 _RK_E = DOPRI5.b_err
 _RK_P = DOPRI5.dense
 _RK_Q = 5.0
-
-# Step-size control (PI controller, Gustafsson / Hairer-Wanner IV.2 style).
-_SAFETY = 0.9
-_FAC_MIN = 0.2
-_FAC_MAX = 6.0
-_PI_ALPHA = 0.7
-_PI_BETA = 0.4
 
 _JIT = dict(cache=True, nogil=True)
 
@@ -257,11 +252,7 @@ def integrate(
                 ok = False
         if adaptive and (not ok or en > 1.0):
             n_rej += 1
-            if ok:
-                fac = max(_FAC_MIN, _SAFETY * en ** (-1.0 / order_q))
-            else:
-                fac = 0.25
-            h *= fac
+            h *= rejected_step_factor(en, ok, order_q)
             last_rejected = True
             if h < 1e-14 * max(1.0, abs(t)):
                 status = ST_UNDERFLOW if ok else ST_NONFINITE
@@ -284,13 +275,8 @@ def integrate(
             for i in range(n):
                 K[0, i] = K[stages - 1, i]
         if adaptive:
-            en = max(en, 1e-10)
-            fac = _SAFETY * en ** (-_PI_ALPHA / order_q) * err_prev ** (_PI_BETA / order_q)
-            fac = min(_FAC_MAX, max(_FAC_MIN, fac))
-            if last_rejected:
-                fac = min(fac, 1.0)
-            h *= fac
-            err_prev = en
+            h *= accepted_step_factor(en, err_prev, order_q, last_rejected)
+            err_prev = max(en, 1e-10)
             last_rejected = False
 
     for i in range(n):
