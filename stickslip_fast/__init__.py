@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
+from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
@@ -31,6 +32,11 @@ __all__ = [
     "SweepResult",
     "load_sweep",
     "MODES",
+    "largest_lyapunov",
+    "LyapunovResult",
+    "phases_from_events",
+    "SyncResult",
+    "sync_error",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",
