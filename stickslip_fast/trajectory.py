@@ -82,7 +82,6 @@ def _observe(
     n_samp,
     ymin,
     ymax,
-    ybuf,
 ):
     """Record what happened inside an accepted step [t0, t0 + h].
 
@@ -192,11 +191,9 @@ def integrate(
     t = 0.0
 
     rhs(y, p, n_osc, dc, f0)
-    if rosen:
-        pass
-    else:
+    if not rosen:
         for i in range(n):
-            K[0, i] = f0[i]
+            K[0, i] = f0[i]  # FSAL: the first stage of the first step
     if samples.shape[0] > 0 and t_transient <= 0.0:
         for i in range(n):
             samples[0, i] = y[i]
@@ -263,7 +260,7 @@ def integrate(
         n_steps += 1
         n_cross, n_samp = _observe(
             kind, t, h, y, ynew, D, t_transient, pts, tpts, n_cross, samples, sample_dt,
-            n_samp, ymin, ymax, ftmp,
+            n_samp, ymin, ymax,
         )  # fmt: skip
         t = t + h
         for i in range(n):
