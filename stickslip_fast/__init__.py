@@ -5,7 +5,7 @@ Models the coupled translational-rotational disks-on-belts system of Kudra et al
 a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
-Main entry points: :class:`System`, :func:`simulate`.
+Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
+from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
 from .system import PRESETS, SWEEPABLE, System
 from .trajectory import METHODS
 
@@ -26,6 +27,10 @@ __all__ = [
     "System",
     "simulate",
     "SimulationResult",
+    "sweep",
+    "SweepResult",
+    "load_sweep",
+    "MODES",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",

@@ -128,6 +128,92 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from .sweep import sweep
+
+    cfg = _config_from_args(args)
+    if cfg.sweep is None:
+        raise ConfigError(f"{cfg.source}: a sweep needs a [sweep] section with param and values")
+    sw = cfg.sweep
+    integ = dict(cfg.integration)
+    integ.setdefault("max_points", 256)
+    backend = "local"
+    if args.scheduler or args.workers:
+        backend = "dask"
+    res = sweep(
+        cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
+        chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
+        progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
+        n_workers=args.workers, title=cfg.title, notes=cfg.notes, **integ,
+    )  # fmt: skip
+    if not args.quiet:
+        print(_report(res.path) if res.path is not None else repr(res))
+    return 0
+
+
+def _report(path) -> str:
+    """A text summary of a result file: configuration, progress, periods, statuses."""
+    import h5py
+
+    from .poincare import STATUS_NAMES
+
+    lines = []
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        cfg = json.loads(h5.attrs["config"])
+        names = cfg["param"]
+        done = h5["done"][...].astype(bool)
+        status = h5["status"][...]
+        period = h5["period"][...]
+        lines.append(f"file:      {path}")
+        if h5.attrs.get("title"):
+            lines.append(f"title:     {h5.attrs['title']}")
+        lines.append(
+            f"package:   stickslip_fast {h5.attrs.get('package_version', '?')}, "
+            f"schema {h5.attrs.get('schema_version')}, created {h5.attrs.get('created', '?')}"
+        )
+        sysd = {k: v for k, v in cfg["system"].items() if v is not None}
+        lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+        axes = []
+        for name in names:
+            a = h5[name][...]
+            axes.append(f"{name} in [{a.min():g}, {a.max():g}] ({a.size} values)")
+        lines.append("sweep:     " + " x ".join(axes) + f", mode {cfg['mode']}")
+        st = cfg["settings"]
+        lines.append(
+            f"settings:  method={st['method']} rtol={st['rtol']:g} atol={st['atol']:g} "
+            f"t_end={st['t_end']:g} t_transient={st['t_transient']:g} max_points={st['max_points']}"
+        )
+        lines.append(
+            f"progress:  {int(done.sum())} of {done.size} values done ({100 * done.mean():.1f}%)"
+        )
+    if done.any():
+        codes, counts = np.unique(status[done], return_counts=True)
+        lines.append(
+            "status:    " + ", ".join(f"{STATUS_NAMES[c]} {n}" for c, n in zip(codes, counts))
+        )
+        ok = done & (status == 0)
+        if ok.any():
+            per, pc = np.unique(period[ok], return_counts=True)
+            hist = ", ".join(f"{'none' if p == 0 else f'P{p}'}: {n}" for p, n in zip(per, pc))
+            lines.append(f"periods:   {hist}")
+    return "\n".join(lines)
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    import h5py
+
+    try:
+        print(_report(args.file))
+    except (OSError, KeyError) as exc:
+        raise ValueError(
+            f"{args.file}: not a readable stickslip_fast result file ({exc})"
+        ) from None
+    if args.json:
+        with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
+            print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="stickslip-fast",
@@ -141,6 +227,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--save", metavar="FILE.npz", help="save points and samples to an .npz file")
     p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("sweep", help="bifurcation sweep into an HDF5 file (resumable)")
+    _add_common(p)
+    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="HDF5 result file")
+    p.add_argument("--threads", type=int, help="Numba threads (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.set_defaults(func=_cmd_sweep)
+
+    p = sub.add_parser("info", help="summarise a result file")
+    p.add_argument("file", metavar="OUT.h5")
+    p.add_argument("--json", action="store_true", help="also print the stored configuration")
+    p.set_defaults(func=_cmd_info)
     return parser
 
 
@@ -152,6 +252,13 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, ValueError) as exc:
         print(f"stickslip-fast: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(
+            "stickslip-fast: interrupted; finished chunks are in the file, "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -42,6 +42,7 @@ __all__ = [
     "eta_prime",
     "friction",
     "friction_partials",
+    "friction_second_partials",
     "rhs",
     "jacobian_blocks",
     "dense_jacobian",
@@ -95,6 +96,41 @@ def friction_partials(v: float, w: float, eps: float, etap: float):
     m_v = (2.0 / 3.0) * w * v * h
     m_w = (2.0 / 3.0) * (g + w * w * h)
     return t, mm, t_v, t_w, m_v, m_w
+
+
+@njit(**_JIT)
+def friction_second_partials(v: float, w: float, eps: float, etap: float):
+    """Second partial derivatives of T_s and M_s w.r.t. slip v and spin w.
+
+    Returns (T_vv, T_vw, T_ww, M_vv, M_vw, M_ww). With s = v^2 + w^2 + eps^2,
+    g = s^(-1/2) + eta' eps^3 s^(-2), h = 2 dg/ds = -s^(-3/2) - 4 eta' eps^3 s^(-3)
+    (as in :func:`friction_partials`) and q = 2 dh/ds = 3 s^(-5/2) + 24 eta' eps^3 s^(-4),
+    so that dg/dv = v h, dh/dv = v q (likewise for w)::
+
+        T_vv = 3 v h + v^3 q          M_vv = (2/3) (w h + v^2 w q)
+        T_vw = w h + v^2 w q          M_vw = (2/3) (v h + v w^2 q)
+        T_ww = v h + v w^2 q          M_ww = (2/3) (3 w h + w^3 q)
+
+    Used by the variational equations (:mod:`stickslip_fast.analysis`), whose
+    Jacobian needs d(J(y) u)/dy.
+    """
+    s = v * v + w * w + eps * eps
+    inv_sqrt = 1.0 / math.sqrt(s)
+    inv_s = 1.0 / s
+    e3 = etap * eps * eps * eps
+    inv_s3 = inv_s * inv_s * inv_s
+    h = -inv_sqrt * inv_s - 4.0 * e3 * inv_s3
+    q = 3.0 * inv_sqrt * inv_s * inv_s + 24.0 * e3 * inv_s3 * inv_s
+    vq = v * q
+    wq = w * q
+    t_vv = 3.0 * v * h + v * v * vq
+    t_vw = w * h + v * v * wq
+    t_ww = v * h + v * w * wq
+    two3 = 2.0 / 3.0
+    m_vv = two3 * (w * h + v * v * wq)
+    m_vw = two3 * (v * h + v * w * wq)
+    m_ww = two3 * (3.0 * w * h + w * w * wq)
+    return t_vv, t_vw, t_ww, m_vv, m_vw, m_ww
 
 
 @njit(**_JIT)

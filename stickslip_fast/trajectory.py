@@ -322,10 +322,49 @@ def unroll_ring(pts: np.ndarray, tpts: np.ndarray, n_cross: int, out: np.ndarray
     return k
 
 
+@njit(**_JIT)
+def _run_value(
+    method, y0, p, n_osc, dc, t_end, t_transient, rtol, atol, h_fixed, max_steps,
+    equilibrium_tol, period_tol, max_period, max_points,
+    points, t_points, out_i, final_state,
+):  # fmt: skip
+    """One sweep value: integrate, unroll the points into time order, find the period.
+
+    ``out_i`` receives (count, period, status, n_steps, n_rejected, n_crossings);
+    ``points``/``t_points`` must be NaN-filled on entry and stay NaN unless the
+    run has an orbit (status "ok").
+    """
+    n = y0.size
+    ring = np.empty((max_points, n))
+    tring = np.empty(max_points)
+    samples = np.empty((0, n))
+    stat_i = np.zeros(N_STAT_I, dtype=np.int64)
+    stat_f = np.zeros(N_STAT_F)
+    st = integrate(
+        method, y0, p, n_osc, dc, t_end, t_transient, rtol, atol, h_fixed, max_steps,
+        equilibrium_tol, ring, tring, samples, 1.0, final_state, stat_i, stat_f,
+    )  # fmt: skip
+    count = 0
+    period = 0
+    if st == ST_OK:
+        count = unroll_ring(ring, tring, stat_i[I_CROSSINGS], points, t_points)
+        period = detect_period(points, count, period_tol, max_period)
+    out_i[0] = count
+    out_i[1] = period
+    out_i[2] = st
+    out_i[3] = stat_i[I_STEPS]
+    out_i[4] = stat_i[I_REJECTED]
+    out_i[5] = stat_i[I_CROSSINGS]
+
+
+#: Columns of the integer output of the sweep kernels.
+SWEEP_INT_FIELDS = ("count", "period", "status", "n_steps", "n_rejected", "n_crossings")
+
+
 @njit(parallel=True, cache=True)
 def sweep_chunk(
     method: int,
-    y0s: np.ndarray,
+    y0: np.ndarray,
     params: np.ndarray,
     n_osc: int,
     dc: bool,
@@ -340,43 +379,75 @@ def sweep_chunk(
     max_period: int,
     max_points: int,
 ):
-    """Run one trajectory per row of ``params`` (n_values, N_PARAMS) in parallel.
+    """Restart mode: one independent trajectory from ``y0`` per row of ``params``.
 
-    ``y0s`` is (n_values, n_state). Each trajectory is independent and
-    sequential, so results do not depend on the thread count or on how values
-    are grouped into chunks. Returns (points, t_points, count, period, status,
-    n_steps, n_rejected, n_crossings, final_state); points are in time order
-    and NaN-padded, and NaN for runs without an orbit.
+    ``params`` is (n_values, N_PARAMS). Each trajectory is sequential and
+    independent, so results do not depend on the thread count or on how values
+    are grouped into chunks. Returns (points (n, max_points, n_state),
+    t_points (n, max_points), ints (n, 6) with columns SWEEP_INT_FIELDS,
+    final_state (n, n_state)); points are in time order and NaN-padded.
     """
     nv = params.shape[0]
-    n = y0s.shape[1]
+    n = y0.size
     points = np.full((nv, max_points, n), np.nan)
     t_points = np.full((nv, max_points), np.nan)
-    count = np.zeros(nv, dtype=np.int64)
-    period = np.zeros(nv, dtype=np.int64)
-    status = np.zeros(nv, dtype=np.int64)
-    n_steps = np.zeros(nv, dtype=np.int64)
-    n_rejected = np.zeros(nv, dtype=np.int64)
-    n_crossings = np.zeros(nv, dtype=np.int64)
+    ints = np.zeros((nv, 6), dtype=np.int64)
     final_state = np.full((nv, n), np.nan)
     for v in prange(nv):
-        ring = np.empty((max_points, n))
-        tring = np.empty(max_points)
-        samples = np.empty((0, n))
-        stat_i = np.zeros(N_STAT_I, dtype=np.int64)
-        stat_f = np.zeros(N_STAT_F)
-        yend = np.empty(n)
-        st = integrate(
-            method, y0s[v], params[v], n_osc, dc, t_end, t_transient, rtol, atol, h_fixed,
-            max_steps, equilibrium_tol, ring, tring, samples, 1.0, yend, stat_i, stat_f,
+        _run_value(
+            method, y0, params[v], n_osc, dc, t_end, t_transient, rtol, atol, h_fixed,
+            max_steps, equilibrium_tol, period_tol, max_period, max_points,
+            points[v], t_points[v], ints[v], final_state[v],
         )  # fmt: skip
-        status[v] = st
-        n_steps[v] = stat_i[I_STEPS]
-        n_rejected[v] = stat_i[I_REJECTED]
-        n_crossings[v] = stat_i[I_CROSSINGS]
-        final_state[v] = yend
-        if st == ST_OK:
-            k = unroll_ring(ring, tring, stat_i[I_CROSSINGS], points[v], t_points[v])
-            count[v] = k
-            period[v] = detect_period(points[v], k, period_tol, max_period)
-    return points, t_points, count, period, status, n_steps, n_rejected, n_crossings, final_state
+    return points, t_points, ints, final_state
+
+
+@njit(parallel=True, cache=True)
+def continuation_chunk(
+    method: int,
+    y0: np.ndarray,
+    y_starts: np.ndarray,
+    params: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    t_end: float,
+    t_transient: float,
+    rtol: float,
+    atol: float,
+    h_fixed: float,
+    max_steps: int,
+    equilibrium_tol: float,
+    period_tol: float,
+    max_period: int,
+    max_points: int,
+):
+    """Continuation mode: chains of values, each starting from the previous final state.
+
+    ``params`` is (n_chains, length, N_PARAMS) and ``y_starts`` (n_chains,
+    n_state) the state each chain starts from. Chains run in parallel; within
+    a chain the values run in order. A value whose final state is not finite
+    hands ``y0`` to the next one instead. Outputs as :func:`sweep_chunk`, with a
+    leading chain axis.
+    """
+    nc = params.shape[0]
+    nl = params.shape[1]
+    n = y0.size
+    points = np.full((nc, nl, max_points, n), np.nan)
+    t_points = np.full((nc, nl, max_points), np.nan)
+    ints = np.zeros((nc, nl, 6), dtype=np.int64)
+    final_state = np.full((nc, nl, n), np.nan)
+    for c in prange(nc):
+        y_start = y_starts[c].copy()
+        for k in range(nl):
+            _run_value(
+                method, y_start, params[c, k], n_osc, dc, t_end, t_transient, rtol, atol,
+                h_fixed, max_steps, equilibrium_tol, period_tol, max_period, max_points,
+                points[c, k], t_points[c, k], ints[c, k], final_state[c, k],
+            )  # fmt: skip
+            finite = True
+            for i in range(n):
+                if not math.isfinite(final_state[c, k, i]):
+                    finite = False
+            for i in range(n):
+                y_start[i] = final_state[c, k, i] if finite else y0[i]
+    return points, t_points, ints, final_state

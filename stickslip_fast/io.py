@@ -1,0 +1,414 @@
+"""The HDF5 result file: schema, writer and reader (the one place that knows the layout).
+
+A sweep file is a plain HDF5 file that also reads as a netCDF-4 style labelled
+dataset (``xarray.open_dataset(path, engine="h5netcdf")``). Layout (schema 1),
+for a sweep of parameter(s) ``P1[, P2]`` with ``n1[, n2]`` values::
+
+    /P1            (n1,)   coordinate: values of the first parameter
+    /P2            (n2,)   coordinate (2-D sweeps only)
+    /branch        (2,)    "up", "down" (mode "continuation-both" only)
+    /point         (K,)    0..K-1, K = max_points
+    /state         (S,)    state names: x1, dx1, phi1, dphi1, ..., [vb]
+    /points        (grid..., point, state)  Poincare points, time order, NaN-padded
+    /t_points      (grid..., point)         their times
+    /count         (grid...)   number of stored points
+    /period        (grid...)   detected period (0: none)
+    /status        (grid...)   int8 code; attrs flag_values / flag_meanings
+    /n_steps, /n_rejected, /n_crossings (grid...)
+    /final_state   (grid..., state)
+    /done          (grid...)   1 once the value is written (for resume)
+
+``grid`` is ``[branch,] P1[, P2]``. Root attributes: ``schema_version``,
+``package_version``, ``config`` (JSON of everything that determines the
+results), ``config_sha256``, ``created``, ``title``, ``notes`` and a flat copy of
+the main settings for quick inspection. The full description for collaborators
+is docs/file-format.md.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from .poincare import STATUS_NAMES
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "ConfigMismatchError",
+    "SweepFile",
+    "config_digest",
+    "read_sweep",
+    "PER_VALUE_FIELDS",
+]
+
+SCHEMA_VERSION = 1
+
+#: Per-value integer datasets and their dtypes.
+PER_VALUE_FIELDS = {
+    "count": "i4",
+    "period": "i4",
+    "status": "i1",
+    "n_steps": "i8",
+    "n_rejected": "i8",
+    "n_crossings": "i8",
+}
+
+_DESCRIPTIONS = {
+    "points": "Full state at each local minimum of x1 (upward zero crossing of dx1), "
+    "in time order, NaN-padded; the most recent max_points after t_transient",
+    "t_points": "Times of the Poincare points",
+    "count": "Number of stored Poincare points",
+    "period": "Smallest p <= 64 with which the stored points repeat (0: none detected)",
+    "status": "Outcome of the trajectory (see flag_meanings)",
+    "n_steps": "Accepted integration steps",
+    "n_rejected": "Rejected integration steps",
+    "n_crossings": "All Poincare crossings after t_transient (may exceed max_points)",
+    "final_state": "State at t_end (start of the next value in continuation modes)",
+    "done": "1 when this value has been computed and written",
+}
+
+
+class ConfigMismatchError(ValueError):
+    """An existing result file was made by a different configuration."""
+
+
+def _canonical(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _canonical(obj[k]) for k in sorted(obj)}
+    if isinstance(obj, (list, tuple)):
+        return [_canonical(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return [_canonical(v) for v in obj.tolist()]
+    if isinstance(obj, (np.floating, np.integer)):
+        return obj.item()
+    return obj
+
+
+def config_digest(config: dict) -> tuple[str, str]:
+    """Canonical JSON text of a configuration and its SHA-256."""
+    text = json.dumps(_canonical(config), sort_keys=True, separators=(",", ":"))
+    return text, hashlib.sha256(text.encode()).hexdigest()
+
+
+def _diff_keys(a: dict, b: dict, prefix: str = "") -> list[str]:
+    keys = []
+    for k in sorted(set(a) | set(b)):
+        va, vb = a.get(k), b.get(k)
+        if isinstance(va, dict) and isinstance(vb, dict):
+            keys += _diff_keys(va, vb, f"{prefix}{k}.")
+        elif va != vb:
+            keys.append(f"{prefix}{k}")
+    return keys
+
+
+@dataclass
+class SweepLayout:
+    """Shape information a writer needs."""
+
+    param_names: tuple[str, ...]
+    axes: tuple[np.ndarray, ...]
+    branches: bool
+    max_points: int
+    state_names: list[str]
+
+    @property
+    def grid_shape(self) -> tuple[int, ...]:
+        return ((2,) if self.branches else ()) + tuple(len(a) for a in self.axes)
+
+    @property
+    def grid_dims(self) -> tuple[str, ...]:
+        return (("branch",) if self.branches else ()) + self.param_names
+
+
+class SweepFile:
+    """Create, check and append to a sweep result file.
+
+    ``SweepFile.open(path, config, layout)`` creates the file, or reopens an
+    existing one after checking that it was made by the same configuration
+    (raising :class:`ConfigMismatchError` otherwise). Chunks are written with
+    :meth:`write` and flushed at once; the file stays readable (SWMR) while a
+    sweep appends to it, and a killed sweep loses only the chunks in flight.
+    """
+
+    def __init__(self, h5: h5py.File, layout: SweepLayout, lock: _WriterLock | None = None):
+        self.h5 = h5
+        self.layout = layout
+        self._lock = lock
+
+    # --------------------------------------------------------------- creation
+    @classmethod
+    def open(
+        cls,
+        path: str | Path,
+        config: dict,
+        layout: SweepLayout,
+        *,
+        title: str = "",
+        notes: str = "",
+        package_version: str = "",
+    ) -> SweepFile:
+        path = Path(path)
+        text, digest = config_digest(config)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        lock = _WriterLock(path)
+        try:
+            if path.exists():
+                h5 = cls._reopen(path, text, digest)
+            else:
+                tmp = path.with_name(path.name + ".partial")
+                h5 = h5py.File(tmp, "w", libver="latest")
+                try:
+                    cls._create_layout(
+                        h5, layout, text, digest, config, title, notes, package_version
+                    )
+                    h5.close()
+                    tmp.replace(path)  # the file appears only once its layout is complete
+                except BaseException:
+                    h5.close()
+                    tmp.unlink(missing_ok=True)
+                    raise
+                h5 = h5py.File(path, "r+", libver="latest")
+            h5.swmr_mode = True
+        except BaseException:
+            lock.release()
+            raise
+        return cls(h5, layout, lock)
+
+    @classmethod
+    def _reopen(cls, path: Path, text: str, digest: str) -> h5py.File:
+        """Open an existing file for appending after checking its configuration."""
+        try:
+            h5 = h5py.File(path, "r", libver="latest", swmr=True)
+        except OSError as exc:
+            raise ConfigMismatchError(
+                f"{path} exists but is not a readable HDF5 file ({exc}); "
+                "remove it or choose another output path"
+            ) from None
+        with h5:
+            found = h5.attrs.get("config_sha256")
+            old = h5.attrs.get("config")
+            schema = h5.attrs.get("schema_version")
+        if found != digest:
+            detail = ""
+            if old is not None:
+                try:
+                    changed = _diff_keys(json.loads(old), json.loads(text))
+                    detail = f" (differs in: {', '.join(changed) or 'unknown'})"
+                except json.JSONDecodeError:
+                    pass
+            raise ConfigMismatchError(
+                f"{path} was written by a different configuration{detail}; refusing to "
+                "overwrite it. Use another output path, or delete the file to start over."
+            )
+        if schema != SCHEMA_VERSION:
+            raise ConfigMismatchError(f"{path} has an unsupported schema version {schema!r}")
+        try:
+            return h5py.File(path, "r+", libver="latest")
+        except OSError as exc:
+            if "already open for write" not in str(exc):
+                raise
+        # A writer was killed (we hold the writer lock, so none is alive): HDF5 left
+        # the file marked open. Rebuild it from what was flushed, then append.
+        _rebuild(path)
+        return h5py.File(path, "r+", libver="latest")
+
+    @staticmethod
+    def _create_layout(h5, layout, text, digest, config, title, notes, package_version):
+        h5.attrs["schema_version"] = SCHEMA_VERSION
+        h5.attrs["package_version"] = package_version
+        h5.attrs["config"] = text
+        h5.attrs["config_sha256"] = digest
+        h5.attrs["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+        h5.attrs["title"] = title
+        h5.attrs["notes"] = notes
+        h5.attrs["Conventions"] = "CF-1.8"
+        for key in ("mode", "method", "rtol", "atol", "h", "t_end", "t_transient", "max_points"):
+            value = config.get("settings", {}).get(key, config.get(key))
+            if value is not None:
+                h5.attrs[key] = value
+        h5.attrs["param"] = ",".join(layout.param_names)
+        for key, value in config["system"].items():
+            if value is not None:
+                h5.attrs[f"system.{key}"] = value
+
+        scales = {}
+        if layout.branches:
+            d = h5.create_dataset("branch", data=np.array(["up", "down"], dtype=object),
+                                  dtype=h5py.string_dtype())  # fmt: skip
+            d.make_scale("branch")
+            d.attrs["long_name"] = "continuation direction (up: increasing values)"
+            scales["branch"] = d
+        for name, axis in zip(layout.param_names, layout.axes):
+            d = h5.create_dataset(name, data=np.asarray(axis, dtype="f8"))
+            d.make_scale(name)
+            d.attrs["long_name"] = f"swept parameter {name} (nondimensional)"
+            scales[name] = d
+        d = h5.create_dataset("point", data=np.arange(layout.max_points, dtype="i4"))
+        d.make_scale("point")
+        d.attrs["long_name"] = "index of the Poincare point, in time order"
+        scales["point"] = d
+        d = h5.create_dataset("state", data=np.array(layout.state_names, dtype=object),
+                              dtype=h5py.string_dtype())  # fmt: skip
+        d.make_scale("state")
+        d.attrs["long_name"] = "state variable"
+        scales["state"] = d
+
+        grid = layout.grid_shape
+        gdims = layout.grid_dims
+        n_state = len(layout.state_names)
+        kp = layout.max_points
+        # chunk along the value axes so appending a sweep chunk touches few HDF5 chunks
+        vchunk = tuple(min(s, 64) for s in grid)
+        specs = {
+            "points": (grid + (kp, n_state), "f8", gdims + ("point", "state"), np.nan),
+            "t_points": (grid + (kp,), "f8", gdims + ("point",), np.nan),
+            "final_state": (grid + (n_state,), "f8", gdims + ("state",), np.nan),
+            "done": (grid, "u1", gdims, 0),
+        }
+        for name, dtype in PER_VALUE_FIELDS.items():
+            specs[name] = (grid, dtype, gdims, -1 if name == "status" else 0)
+        for name, (shape, dtype, dims, fill) in specs.items():
+            chunks = vchunk + tuple(min(s, 256) for s in shape[len(grid) :])
+            if kp == 0 and name in ("points", "t_points"):
+                chunks = None
+            d = h5.create_dataset(
+                name, shape=shape, dtype=dtype, fillvalue=fill, chunks=chunks,
+                compression="gzip" if chunks else None,
+                compression_opts=1 if chunks else None, shuffle=bool(chunks),
+            )  # fmt: skip
+            for i, dim in enumerate(dims):
+                d.dims[i].attach_scale(scales[dim])
+            d.attrs["description"] = _DESCRIPTIONS[name]
+        st = h5["status"]
+        st.attrs["flag_values"] = np.arange(len(STATUS_NAMES), dtype="i1")
+        st.attrs["flag_meanings"] = " ".join(STATUS_NAMES)
+        st.attrs["missing_value"] = np.int8(-1)
+
+    # ----------------------------------------------------------------- access
+    def done_mask(self) -> np.ndarray:
+        return self.h5["done"][...].astype(bool)
+
+    def final_state_at(self, index: tuple) -> np.ndarray:
+        return self.h5["final_state"][index]
+
+    def write(self, index: tuple, data: dict[str, np.ndarray]) -> None:
+        """Write one block of values at grid ``index`` (ints and slices) and flush.
+
+        ``data`` holds points, t_points, final_state and the PER_VALUE_FIELDS,
+        each with the block's value axes first. ``done`` is set last.
+        """
+        for name in ("points", "t_points", "final_state", *PER_VALUE_FIELDS):
+            self.h5[name][index] = data[name]
+        self.h5.flush()
+        self.h5["done"][index] = 1
+        self.h5.flush()
+
+    def close(self) -> None:
+        if self.h5.id.valid:
+            self.h5.close()
+        if self._lock is not None:
+            self._lock.release()
+            self._lock = None
+
+    def __enter__(self) -> SweepFile:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class _WriterLock:
+    """An exclusive OS lock on ``<file>.lock`` held while a sweep writes the file.
+
+    The OS drops it when the process dies, which tells a crashed writer (resume
+    is safe) from a live one (refuse). No-op where fcntl is unavailable.
+    """
+
+    def __init__(self, path: Path):
+        self.path = path.with_name(path.name + ".lock")
+        self.fd: int | None = None
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX
+            return
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise ConfigMismatchError(
+                f"another process is writing {path} (lock {self.path} is held); "
+                "wait for it to finish or choose another output path"
+            ) from None
+        self.fd = fd
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+            self.path.unlink(missing_ok=True)
+
+
+def _copy_attrs(src, dst) -> None:
+    for key, value in src.attrs.items():
+        if key not in ("DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME"):
+            dst.attrs[key] = value
+
+
+def _rebuild(path: Path, slab: int = 4096) -> None:
+    """Copy a crashed writer's file into a fresh one (same layout, flushed data only)."""
+    tmp = path.with_name(path.name + ".recovering")
+    with (
+        h5py.File(path, "r", libver="latest", swmr=True) as src,
+        h5py.File(tmp, "w", libver="latest") as dst,
+    ):
+        _copy_attrs(src, dst)
+        for name, ds in src.items():
+            if "CLASS" in ds.attrs and ds.attrs["CLASS"] == b"DIMENSION_SCALE":
+                new = dst.create_dataset(name, data=ds[...], dtype=ds.dtype)
+                new.make_scale(name)
+                _copy_attrs(ds, new)
+        for name, ds in src.items():
+            if name in dst:
+                continue
+            new = dst.create_dataset(
+                name, shape=ds.shape, dtype=ds.dtype, chunks=ds.chunks, fillvalue=ds.fillvalue,
+                compression=ds.compression, compression_opts=ds.compression_opts,
+                shuffle=ds.shuffle,
+            )  # fmt: skip
+            for i, dim in enumerate(ds.dims):
+                for scale_name in dim.keys():
+                    new.dims[i].attach_scale(dst[scale_name.lstrip("/")])
+            _copy_attrs(ds, new)
+            if ds.ndim == 0:
+                new[()] = ds[()]
+                continue
+            for a in range(0, ds.shape[0], slab):
+                new[a : a + slab] = ds[a : a + slab]
+    tmp.replace(path)
+
+
+def read_sweep(path: str | Path) -> dict[str, Any]:
+    """Read a whole sweep file into memory: arrays, coordinates and configuration."""
+    out: dict[str, Any] = {}
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        if h5.attrs.get("schema_version") != SCHEMA_VERSION:
+            raise ValueError(f"{path}: not a stickslip_fast sweep file (schema_version missing)")
+        out["config"] = json.loads(h5.attrs["config"])
+        out["attrs"] = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
+        params = tuple(str(h5.attrs["param"]).split(","))
+        out["param"] = params
+        out["axes"] = tuple(h5[p][...] for p in params)
+        out["branches"] = "branch" in h5
+        out["state_names"] = [s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]]
+        for name in ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS):
+            out[name] = h5[name][...]
+    return out

@@ -1,0 +1,131 @@
+"""TOML configs (errors name the key) and the command line."""
+
+import glob
+import json
+import os
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.cli import main
+from stickslip_fast.config import ConfigError, load_config, paper_order_to_state
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+SMALL = """
+title = "small"
+[system]
+preset = "asymmetric"
+[integration]
+t_end = 600.0
+t_transient = 300.0
+max_points = 8
+[sweep]
+param = "eta"
+values = { start = 6.0, stop = 9.0, num = 4 }
+"""
+
+
+def _write(tmp_path, text, name="c.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize(
+    "text,match",
+    [
+        ("[sytem]\neta = 2.0", "sytem"),
+        ("[system]\netta = 2.0", "etta"),
+        ("[system]\neta = 12.0", "eta"),
+        ("[system]\npreset = 'nope'", "preset"),
+        ("[system]\ndrive = 'belt'", "drive"),
+        ("[integration]\nt_end = 'long'", "t_end"),
+        ("[integration]\nmax_points = 1.5", "max_points"),
+        ("[integration]\nrtool = 1e-8", "rtool"),
+        ("[initial]\ny0 = [0, 0, 0]", "y0"),
+        ("[initial]\ny0_paper = [0, 0, 0]", "y0_paper"),
+        ("[simulate]\nsample_dt = -1", "sample_dt"),
+        ("[sweep]\nparam = 'eta'", "values"),
+        ("[sweep]\nparam = 'eta'\nvalues = { start = 1, stop = 2 }", "values"),
+        ("[sweep]\nparam = 'eta'\nvalues = [1, 2]\nchunk = 3", "chunk"),
+        ("[sweep]\nparam = 'eta'\nvalues = [1, 2]\nchunk_size = 0", "chunk_size"),
+        ("[system\neta = 2", "invalid TOML"),
+    ],
+)
+def test_bad_config_names_the_key(tmp_path, text, match):
+    with pytest.raises(ConfigError, match=match):
+        load_config(_write(tmp_path, text))
+
+
+def test_paper_order_initial_condition_for_two_disks():
+    # paper: (x1, x2, dx1, dx2, phi1, phi2, dphi1, dphi2)
+    y = paper_order_to_state([1, 2, 3, 4, 5, 6, 7, 8], 2, vb=0.5)
+    np.testing.assert_array_equal(y, [1, 3, 5, 7, 2, 4, 6, 8, 0.5])
+
+
+def test_every_data_config_loads_and_matches_the_paper():
+    files = sorted(glob.glob(os.path.join(ROOT, "data", "*.toml")))
+    figs = {os.path.basename(f)[3:5] for f in files}
+    assert figs >= {"02", "03", "04", "05", "06", "07", "09", "10", "11", "12", "13", "14",
+                    "15", "16", "17", "18"}  # fmt: skip
+    for f in files:
+        cfg = load_config(f)
+        assert cfg.title.startswith("Fig.")
+        if cfg.sweep:
+            assert cfg.sweep["param"] == "eta" and len(cfg.sweep["values"]) >= 1000
+            assert cfg.sweep["values"].min() == 1.0 and cfg.sweep["values"].max() == 10.0
+    fig16 = load_config(os.path.join(ROOT, "data", "fig16_asymmetric_dcmotor_N2.toml"))
+    np.testing.assert_array_equal(fig16.y0, [0, 0, 0, 0, 0.01, 0.01, 0.01, 0.01, 0])
+    fig14 = load_config(os.path.join(ROOT, "data", "fig14_symmetric_dcmotor_N2.toml"))
+    np.testing.assert_array_equal(fig14.y0, [0, 0, 0, 0, 0.05, 0.05, 0, 0, 0])
+
+
+def test_cli_sweep_info_and_resume(tmp_path, capsys):
+    cfg = _write(tmp_path, SMALL)
+    out = tmp_path / "o.h5"
+    assert main(["sweep", str(cfg), "-o", str(out), "--quiet"]) == 0
+    assert capsys.readouterr().out == ""
+    res = ssf.sweep(ssf.System.preset("asymmetric"), "eta", np.linspace(6, 9, 4),
+                    t_end=600.0, t_transient=300.0, max_points=8)  # fmt: skip
+    with h5py.File(out, "r") as h5:
+        np.testing.assert_array_equal(h5["points"][...], res.points)
+        assert json.loads(h5.attrs["config"])["settings"]["t_end"] == 600.0
+    assert main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "4 of 4 values done" in text and "eta in [6, 9] (4 values)" in text
+    # same command again: resumes (nothing to do) and reports
+    assert main(["sweep", str(cfg), "-o", str(out)]) == 0
+    assert "4 of 4 values done" in capsys.readouterr().out
+    # a changed config on the same file is refused, naming what changed
+    assert main(["sweep", str(cfg), "-o", str(out), "--t-end", "700"]) == 2
+    assert "settings.t_end" in capsys.readouterr().err
+
+
+def test_cli_simulate_prints_points_and_period(capsys):
+    assert main(["simulate", "--preset", "asymmetric", "--eta", "9.99", "--show", "4"]) == 0
+    text = capsys.readouterr().out
+    assert "status: ok" in text and "period: 2" in text
+    assert main(["simulate", "--eta", "11"]) == 2
+    assert "eta" in capsys.readouterr().err
+    assert (
+        main(["simulate", "--set", "k12=-0.5", "--json", "--t-end", "500", "--t-transient", "0"])
+        == 0
+    )
+    data = json.loads(capsys.readouterr().out)
+    assert data["system"]["k12"] == -0.5 and len(data["poincare"]) == len(data["t_poincare"])
+
+
+def test_console_script_runs_in_a_subprocess(tmp_path):
+    # what the README runs; the CLI must work as a separate process (Numba cache)
+    cfg = _write(tmp_path, SMALL)
+    proc = subprocess.run(
+        [sys.executable, "-m", "stickslip_fast.cli", "sweep", str(cfg), "-o", str(tmp_path / "x.h5")],
+        capture_output=True, text=True, cwd=ROOT, timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "periods:" in proc.stdout and proc.stderr.count("\r") == 0  # no progress bar off a tty
