@@ -11,6 +11,8 @@ import json
 import math
 import sys
 import time
+import traceback
+import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -63,21 +65,33 @@ def main(argv=None):
     results = dict(mode=mode, machine=machine_info(), sweep_impl=SWEEP_IMPL, sections={})
     want = set(args.only or SECTIONS)
     sec = results["sections"]
-    if "startup" in want:  # first: its child processes compile into their own cache
-        sec["startup"] = startup.run(mode, log)
-    if "work_precision" in want:
-        sec["work_precision"] = work_precision.run(mode, log)
-        work_precision.plot(sec["work_precision"], out / "work_precision.png")
-    if "sweep_throughput" in want:
-        sec["sweep_throughput"] = sweeps.throughput(mode, log)
-    if "parallel_scaling" in want:
-        sec["parallel_scaling"] = sweeps.parallel_scaling(mode, log)
-    if "n_scaling" in want:
-        log("scaling in N (DC motor, 1 thread) ...")
-        sec["n_scaling"] = sweeps.n_scaling(mode, log)
-        sweeps.plot(sec, out / "n_scaling.png")
-    if "memory" in want:
-        sec["memory"] = sweeps.memory(mode, log)
+    plan = [  # start-up first: its child processes compile into their own cache
+        ("startup", lambda: startup.run(mode, log)),
+        ("work_precision", lambda: work_precision.run(mode, log)),
+        ("sweep_throughput", lambda: sweeps.throughput(mode, log)),
+        ("parallel_scaling", lambda: sweeps.parallel_scaling(mode, log)),
+        ("n_scaling", lambda: sweeps.n_scaling(mode, log)),
+        ("memory", lambda: sweeps.memory(mode, log)),
+    ]
+    failed = []
+    for name, fn in plan:
+        if name not in want:
+            continue
+        log(f"== {name}")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # sweeps warn about equilibria
+                sec[name] = fn()
+        except Exception:  # noqa: BLE001 - record and go on with the other sections
+            sec[name] = dict(status="error", traceback=traceback.format_exc()[-4000:])
+            failed.append(name)
+            log(f"   {name} FAILED:\n{sec[name]['traceback']}")
+            continue
+        if name == "work_precision":
+            work_precision.plot(sec[name], out / "work_precision.png")
+        if name == "n_scaling":
+            sweeps.plot(sec, out / "n_scaling.png")
+        (out / "results.json").write_text(json.dumps(_clean(results), indent=1))
     results["total_wall_s"] = time.perf_counter() - t_start
     import os
 
@@ -86,7 +100,7 @@ def main(argv=None):
     (out / "results.json").write_text(json.dumps(results, indent=1))
     (out / "summary.md").write_text(write_summary(results))
     log(f"done in {results['total_wall_s']:.0f} s; wrote {out}/results.json, summary.md, PNGs")
-    return 0
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

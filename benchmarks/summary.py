@@ -21,7 +21,7 @@ def _verdict(value, target, higher_is_better=True):
 
 def write_summary(r):
     m = r["machine"]
-    sec = r["sections"]
+    sec = {k: v for k, v in r["sections"].items() if v.get("status") != "error"}
     L = [
         f"# stickslip_fast benchmark summary ({r['mode']} run)",
         "",
@@ -225,4 +225,7 @@ def write_summary(r):
         else:
             L.append(f"{me['status']}: {me.get('note', me.get('stderr', ''))}")
         L.append("")
+    for name, v in r["sections"].items():
+        if v.get("status") == "error":
+            L += [f"## {name}: FAILED", "", "```", v["traceback"], "```", ""]
     return "\n".join(L)

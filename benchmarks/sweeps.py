@@ -33,8 +33,9 @@ def _sweep_record(name, cfg, n_values, threads):
     t0 = time.perf_counter()
     c0 = time.process_time()
     res = run_sweep(
-        system, "eta", values, t_end=cfg["t_end"], t_transient=cfg["t_transient"], threads=threads
-    )
+        system, "eta", values, t_end=cfg["t_end"], t_transient=cfg["t_transient"],
+        threads=threads, progress=False,
+    )  # fmt: skip
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0
     status = np.asarray(res.status)
@@ -216,7 +217,7 @@ _MEM_CHILD = textwrap.dedent(
     system = ssf.System.preset("asymmetric")
     values = np.linspace(1.0, 10.0, {n})
     t0 = time.perf_counter()
-    res = ssf.sweep(system, "eta", values, t_end=2.0, t_transient=1.0, out={path!r})
+    res = ssf.sweep(system, "eta", values, t_end=2.0, t_transient=1.0, out={path!r}, progress=False)
     wall = time.perf_counter() - t0
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(json.dumps(dict(n_values={n}, wall=wall, peak_rss_mb=rss)))
