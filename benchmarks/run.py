@@ -53,6 +53,9 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="small sizes, < 2 minutes")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     ap.add_argument("--only", nargs="*", choices=SECTIONS, help="run only these sections")
+    ap.add_argument(
+        "--merge", action="store_true", help="update these sections in an existing results.json"
+    )
     args = ap.parse_args(argv)
     mode = "quick" if args.quick else "full"
     out = Path(args.out)
@@ -63,6 +66,11 @@ def main(argv=None):
         print(f"[{time.perf_counter() - t_start:7.1f} s] {msg}", flush=True)
 
     results = dict(mode=mode, machine=machine_info(), sweep_impl=SWEEP_IMPL, sections={})
+    if args.merge and (out / "results.json").exists():
+        old = json.loads((out / "results.json").read_text())
+        results["sections"] = old["sections"]
+        results["merged_runs"] = old.get("merged_runs", []) + [sorted(args.only or SECTIONS)]
+        results["machine"]["previous_run_machine"] = old["machine"]
     want = set(args.only or SECTIONS)
     sec = results["sections"]
     plan = [  # start-up first: its child processes compile into their own cache
@@ -92,7 +100,11 @@ def main(argv=None):
         if name == "n_scaling":
             sweeps.plot(sec, out / "n_scaling.png")
         (out / "results.json").write_text(json.dumps(_clean(results), indent=1))
-    results["total_wall_s"] = time.perf_counter() - t_start
+    if "merged_runs" in results:  # keep the full run's total; record this one apart
+        results["total_wall_s"] = old.get("total_wall_s", 0.0)
+        results["last_merge_wall_s"] = time.perf_counter() - t_start
+    else:
+        results["total_wall_s"] = time.perf_counter() - t_start
     import os
 
     results["machine"]["loadavg_at_end"] = list(os.getloadavg())

@@ -78,6 +78,20 @@ def static_balance_bound(n_steps, p):
     return float(n_steps.sum() / (p * max(x.sum() for x in parts)))
 
 
+def chunked_dynamic_bound(n_steps, p, chunk):
+    """Best efficiency when values run in consecutive chunks of ``chunk`` (a barrier after
+    each) and are handed out one at a time to the first free of p threads (greedy list
+    scheduling, work = step count)."""
+    w = np.asarray(n_steps, dtype=float)
+    makespan = 0.0
+    for a in range(0, w.size, chunk):
+        free = np.zeros(p)
+        for x in w[a : a + chunk]:
+            free[free.argmin()] += x
+        makespan += free.max()
+    return float(w.sum() / (p * makespan))
+
+
 def throughput(mode, log):
     out = dict(sweep_impl=SWEEP_IMPL)
     # warm-up: compile (or load) the parallel kernel outside the timings
@@ -145,6 +159,9 @@ def parallel_scaling(mode, log):
         cpu_utilisation_1=r1["cpu_utilisation"],
         cpu_utilisation_p=rp["cpu_utilisation"],
         static_split_balance_bound=bound,
+        chunked_dynamic_bound=chunked_dynamic_bound(steps, p, 32 * p),
+        chunk_assumed=32 * p,
+        n_steps_per_value=np.asarray(steps).tolist(),
         cpu_work_ratio=r1["cpu"] / rp["cpu"],
         control_before=before,
         control_after=after,
