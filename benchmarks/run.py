@@ -71,6 +71,10 @@ def main(argv=None):
         results["sections"] = old["sections"]
         results["merged_runs"] = old.get("merged_runs", []) + [sorted(args.only or SECTIONS)]
         results["machine"]["previous_run_machine"] = old["machine"]
+        results["superseded"] = old.get("superseded", {})
+        for name in args.only or SECTIONS:
+            if name in old["sections"]:
+                results["superseded"].setdefault(name, []).append(old["sections"][name])
     want = set(args.only or SECTIONS)
     sec = results["sections"]
     plan = [  # start-up first: its child processes compile into their own cache
