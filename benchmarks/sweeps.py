@@ -174,17 +174,19 @@ N_LIST = {"full": [1, 2, 8, 32, 128, 512], "quick": [1, 8, 32]}
 N_T_END = {"full": 300.0, "quick": 40.0}
 
 
-def n_scaling(mode, log):
-    """Cost per unit simulated time for N disks on one DC motor (single thread)."""
+def _n_scaling_rows(mode, log, offsets: bool):
     t_end = N_T_END[mode]
     rows = []
+    # load the kernels outside the timings
+    ssf.simulate(ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=2), 1.0)
     for n in N_LIST[mode]:
         system = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=n)
-        rng = np.random.default_rng(12345)
         y0 = np.zeros(system.n_state)
-        offs = rng.uniform(-1e-3, 1e-3, size=(n, 4))
-        offs[:, [1, 3]] *= 0.0  # offsets in the positions x_i, phi_i only
-        y0[: 4 * n] = offs.ravel()
+        if offsets:
+            rng = np.random.default_rng(12345)
+            offs = rng.uniform(-1e-3, 1e-3, size=(n, 4))
+            offs[:, [1, 3]] *= 0.0  # offsets in the positions x_i, phi_i only
+            y0[: 4 * n] = offs.ravel()
         t0 = time.perf_counter()
         res = ssf.simulate(system, t_end, 0.0, y0=y0, max_points=100)
         wall = time.perf_counter() - t0
@@ -202,8 +204,8 @@ def n_scaling(mode, log):
             )
         )
         log(
-            f"  N={n}: {wall:.2f} s, {res.n_steps} steps ({res.n_rejected} rejected), "
-            f"{rows[-1]['time_per_step_us']:.1f} us/step"
+            f"  N={n} ({'offsets' if offsets else 'identical'}): {wall:.2f} s, {res.n_steps} steps "
+            f"({res.n_rejected} rejected), {rows[-1]['time_per_step_us']:.1f} us/step"
         )
     base = next((r for r in rows if r["N"] == 8), rows[0])
     for r in rows:
@@ -212,7 +214,23 @@ def n_scaling(mode, log):
         r["cost_per_step_per_N_rel_N8"] = (
             r["time_per_step_per_disk_ns"] / base["time_per_step_per_disk_ns"]
         )
+    return rows
+
+
+def n_scaling(mode, log):
+    """Cost per unit simulated time for N disks on one DC motor (single thread).
+
+    Two scenarios. "identical": all disks start at rest, so they stay identical and
+    every N has the same events; this isolates the engine's cost per disk (the
+    bordered O(N) solves). "offsets": small random offsets desynchronize the disks;
+    N disks then have ~N times as many stick-slip transitions per unit time, all
+    sharing one step size, so the step count itself grows with N.
+    """
+    ident = _n_scaling_rows(mode, log, offsets=False)
+    rows = _n_scaling_rows(mode, log, offsets=True)
     worst = max(r["cost_per_N_rel_N8"] for r in rows if r["N"] >= 8)
+    worst_ident = max(r["cost_per_N_rel_N8"] for r in ident if r["N"] >= 8)
+    worst_step = max(r["cost_per_step_per_N_rel_N8"] for r in rows if r["N"] >= 8)
     return dict(
         drive="dc-motor",
         preset="asymmetric",
@@ -220,7 +238,10 @@ def n_scaling(mode, log):
         threads=1,
         initial_offsets="x_i, phi_i uniform in [-1e-3, 1e-3], seed 12345; v_b(0)=0",
         rows=rows,
+        rows_identical=ident,
         worst_cost_per_N_rel_N8=worst,
+        worst_cost_per_N_rel_N8_identical=worst_ident,
+        worst_cost_per_step_per_N_rel_N8=worst_step,
         target=1.5,
     )
 

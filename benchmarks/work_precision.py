@@ -57,6 +57,8 @@ SETTINGS = {
             "BDF": [1e-4, 1e-6, 1e-8],
             "DOP853": [1e-5, 1e-8],
         },
+        # the baseline users actually write: solve_ivp with a plain NumPy RHS and Jacobian
+        scipy_numpy_rtols={"LSODA": [1e-5, 1e-6, 1e-7, 1e-8, 1e-9]},
         scipy_cap=60.0,
         numbalsoda_rtols=[1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
         radau_check=True,
@@ -68,6 +70,7 @@ SETTINGS = {
         fixed_hs=[1e-4, 2e-5],
         fixed_max_steps=2_000_000,
         scipy_rtols={"LSODA": [1e-6, 1e-8], "Radau": [1e-6]},
+        scipy_numpy_rtols={"LSODA": [1e-6]},
         scipy_cap=10.0,
         numbalsoda_rtols=[1e-6, 1e-8],
         radau_check=False,
@@ -120,7 +123,26 @@ class _Timeout(Exception):
     pass
 
 
-def scipy_problem(system):
+def scipy_problem(system, rhs_kind="compiled"):
+    """RHS and Jacobian for SciPy.
+
+    ``"compiled"``: the engine's Numba functions behind a thin wrapper (compares
+    integrators alone). ``"numpy"``: the independent plain NumPy model in
+    tests/reference/scipy_model.py, i.e. what a SciPy user writes.
+    """
+    if rhs_kind == "numpy":
+        import os
+        import sys
+
+        here = os.path.dirname(os.path.abspath(__file__))
+        sys.path.insert(0, os.path.join(os.path.dirname(here), "tests", "reference"))
+        import scipy_model
+
+        params = system.to_dict()
+        return (
+            lambda t, y: scipy_model.rhs(t, y, params),
+            lambda t, y: scipy_model.jac(t, y, params),
+        )
     from stickslip_fast.model import dense_jacobian, rhs
 
     p = system.to_array()
@@ -139,11 +161,11 @@ def scipy_problem(system):
     return f, jac
 
 
-def run_scipy(system, tr, method, rtol, cap):
+def run_scipy(system, tr, method, rtol, cap, rhs_kind="compiled"):
     """One solve_ivp run with event location; returns a record dict."""
     from scipy.integrate import solve_ivp
 
-    f, jac = scipy_problem(system)
+    f, jac = scipy_problem(system, rhs_kind)
     f(0.0, system.initial_state())  # compile / load from cache outside the timing
     jac(0.0, system.initial_state())
     state = dict(calls=0, t0=time.perf_counter())
@@ -409,15 +431,20 @@ def run(mode, log):
             wall, res = run_engine(system, tr, "dopri5-fixed", h=h, max_steps=need + 1)
             per_step.append(wall / max(res.n_steps, 1))
             add("engine dopri5-fixed", dict(h=h, time=wall), res)
-        for method, rtols in settings["scipy_rtols"].items():
+        runs = [(m, r, "compiled", f"scipy {m}") for m, r in settings["scipy_rtols"].items()]
+        runs += [
+            (m, r, "numpy", f"scipy {m} (NumPy RHS)")
+            for m, r in settings.get("scipy_numpy_rtols", {}).items()
+        ]
+        for method, rtols, rhs_kind, curve in runs:
             gave_up = None
             for rtol in rtols:
                 if gave_up:
-                    curves.setdefault(f"scipy {method}", []).append(
+                    curves.setdefault(curve, []).append(
                         dict(rtol=rtol, status="skipped", error=math.inf, time=None, note=gave_up)
                     )
                     continue
-                rec = run_scipy(system, tr, method, rtol, settings["scipy_cap"])
+                rec = run_scipy(system, tr, method, rtol, settings["scipy_cap"], rhs_kind)
                 rec["rtol"] = rtol
                 if rec["status"] == "timeout":
                     rec["note"] = f"timeout after {settings['scipy_cap']:.0f} s"
@@ -428,9 +455,9 @@ def run(mode, log):
                         f"skipped: rtol={rtol:g} took {rec['time']:.0f} s; explicit DOP853 is "
                         "stability-bound, its cost hardly depends on rtol"
                     )
-                add(f"scipy {method}", rec)
+                add(curve, rec)
                 log(
-                    f"  scipy {method} rtol={rtol:g}: {rec['status']} {rec.get('time')} s, err {rec.get('error')}"
+                    f"  {curve} rtol={rtol:g}: {rec['status']} {rec.get('time')} s, err {rec.get('error')}"
                 )
         if nbl_ok:
             for rtol in settings["numbalsoda_rtols"]:
@@ -451,6 +478,7 @@ def run(mode, log):
 
 COMPETITORS = {
     "scipy LSODA": 100.0,
+    "scipy LSODA (NumPy RHS)": 100.0,
     "numbalsoda LSODA": 2.0,
     "engine dopri5-fixed": 100.0,
 }
@@ -500,6 +528,7 @@ def plot(results, path):
         "engine dopri5": ("C1", "s", "-"),
         "engine dopri5-fixed": ("C2", "^", "-"),
         "scipy LSODA": ("C3", "v", "--"),
+        "scipy LSODA (NumPy RHS)": ("C3", "v", "-."),
         "scipy Radau": ("C4", "D", "--"),
         "scipy BDF": ("C5", "P", "--"),
         "scipy DOP853": ("C6", "X", "--"),
