@@ -83,6 +83,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     cfg = _config_from_args(args)
     res = simulate(cfg.system, y0=cfg.y0, sample_dt=cfg.sample_dt, **cfg.integration)
+    if args.output:
+        from .io import write_trajectory
+
+        write_trajectory(args.output, res, cfg)
+        print(f"wrote {args.output}", file=sys.stderr)
     if args.json:
         out = {
             "system": cfg.system.to_dict(),
@@ -226,6 +231,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--show", type=int, default=12, help="how many points to print (default 12)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--save", metavar="FILE.npz", help="save points and samples to an .npz file")
+    p.add_argument(
+        "-o", "--output", metavar="RUN.h5",
+        help="write the run (samples, Poincare points, status, config) to an HDF5 file",
+    )  # fmt: skip
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser("sweep", help="bifurcation sweep into an HDF5 file (resumable)")

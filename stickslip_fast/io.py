@@ -18,11 +18,42 @@ for a sweep of parameter(s) ``P1[, P2]`` with ``n1[, n2]`` values::
     /final_state   (grid..., state)
     /done          (grid...)   1 once the value is written (for resume)
 
+Optional analysis datasets (only when the sweep was asked for them with
+``sweep(..., analyses=...)``; the list is part of the configuration and its hash)::
+
+    /sync_error    (grid...)   f8  analyses=("sync",): mean distance between disk i's
+                               and disk 1's (x, dx, phi, dphi) over the stored
+                               Poincare points (analysis.sync_error; 0 for N = 1,
+                               NaN where there are no points)
+    /lyapunov      (grid...)   f8  analyses=("lyapunov",): largest Lyapunov exponent,
+                               plain Benettin average (analysis.largest_lyapunov
+                               with the sweep's t_end, t_transient, rtol, atol and
+                               the value's own initial state)
+    /lyapunov_fit  (grid...)   f8  the same run's least-squares slope estimate
+
 ``grid`` is ``[branch,] P1[, P2]``. Root attributes: ``schema_version``,
 ``package_version``, ``config`` (JSON of everything that determines the
 results), ``config_sha256``, ``created``, ``title``, ``notes`` and a flat copy of
 the main settings for quick inspection. The full description for collaborators
 is docs/file-format.md.
+
+Trajectory file (schema 1, root attribute ``kind = "trajectory"``), one run of
+:func:`stickslip_fast.simulate`, written by :func:`write_trajectory`::
+
+    /t             (t,)              coordinate: sample times (empty without sample_dt)
+    /state         (state,)          state names x1, dx1, phi1, dphi1, ..., [vb]
+    /y             (t, state)        samples on the uniform grid t_transient + k sample_dt
+    /crossing      (crossing,)       0..k-1
+    /t_poincare    (crossing,)       times of the Poincare points (local minima of x1)
+    /poincare      (crossing, state) full state at those times
+    /final_state   (state,)          state at t_end
+
+Root attributes: ``schema_version``, ``package_version``, ``kind``, ``config``
+(JSON: system, settings, y0, sample_dt and the TOML mapping it came from),
+``config_sha256``, ``created``, ``title``, ``notes``, ``status``, ``period``,
+``n_steps``, ``n_rejected``, ``n_crossings``, ``t_final``, ``amplitude``,
+``method``. Like a sweep file it opens with
+``xarray.open_dataset(path, engine="h5netcdf")``.
 """
 
 from __future__ import annotations
@@ -47,6 +78,10 @@ __all__ = [
     "config_digest",
     "read_sweep",
     "PER_VALUE_FIELDS",
+    "ANALYSES",
+    "ANALYSIS_FIELDS",
+    "write_trajectory",
+    "read_trajectory",
 ]
 
 SCHEMA_VERSION = 1
@@ -61,7 +96,21 @@ PER_VALUE_FIELDS = {
     "n_crossings": "i8",
 }
 
+#: Optional per-value analyses a sweep can store, and the float datasets each adds.
+ANALYSES: dict[str, tuple[str, ...]] = {
+    "sync": ("sync_error",),
+    "lyapunov": ("lyapunov", "lyapunov_fit"),
+}
+#: Every optional analysis dataset (all float64, NaN where not computed).
+ANALYSIS_FIELDS: tuple[str, ...] = tuple(f for fields in ANALYSES.values() for f in fields)
+
 _DESCRIPTIONS = {
+    "sync_error": "Mean distance between disk i's and disk 1's (x, dx, phi, dphi) at the "
+    "Poincare points (analysis.sync_error); 0 for N = 1, NaN without points",
+    "lyapunov": "Largest Lyapunov exponent, plain Benettin average over [t_transient, t_end] "
+    "(analysis.largest_lyapunov)",
+    "lyapunov_fit": "Largest Lyapunov exponent, least-squares slope of the cumulative log "
+    "growth (analysis.largest_lyapunov exponent_fit)",
     "points": "Full state at each local minimum of x1 (upward zero crossing of dx1), "
     "in time order, NaN-padded; the most recent max_points after t_transient",
     "t_points": "Times of the Poincare points",
@@ -118,6 +167,12 @@ class SweepLayout:
     branches: bool
     max_points: int
     state_names: list[str]
+    analyses: tuple[str, ...] = ()
+
+    @property
+    def analysis_fields(self) -> tuple[str, ...]:
+        """The optional analysis datasets of this file."""
+        return tuple(f for a in self.analyses for f in ANALYSES[a])
 
     @property
     def grid_shape(self) -> tuple[int, ...]:
@@ -275,6 +330,8 @@ class SweepFile:
         }
         for name, dtype in PER_VALUE_FIELDS.items():
             specs[name] = (grid, dtype, gdims, -1 if name == "status" else 0)
+        for name in layout.analysis_fields:
+            specs[name] = (grid, "f8", gdims, np.nan)
         for name, (shape, dtype, dims, fill) in specs.items():
             chunks = vchunk + tuple(min(s, 256) for s in shape[len(grid) :])
             if kp == 0 and name in ("points", "t_points"):
@@ -306,6 +363,8 @@ class SweepFile:
         each with the block's value axes first. ``done`` is set last.
         """
         for name in ("points", "t_points", "final_state", *PER_VALUE_FIELDS):
+            self.h5[name][index] = data[name]
+        for name in self.layout.analysis_fields:
             self.h5[name][index] = data[name]
         self.h5.flush()
         self.h5["done"][index] = 1
@@ -411,4 +470,197 @@ def read_sweep(path: str | Path) -> dict[str, Any]:
         out["state_names"] = [s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]]
         for name in ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS):
             out[name] = h5[name][...]
+        out["analyses"] = {name: h5[name][...] for name in ANALYSIS_FIELDS if name in h5}
     return out
+
+
+# ------------------------------------------------------------- single runs
+def _jsonable(obj: Any) -> Any:
+    """Plain JSON-compatible values (arrays to lists, Paths to str)."""
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
+    """Store one :class:`~stickslip_fast.SimulationResult` in an HDF5 file.
+
+    The layout is the trajectory schema in this module's docstring. The file is
+    written to ``<path>.partial`` and renamed, so it appears only when complete;
+    an existing file is replaced.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file (``.h5``).
+    result : SimulationResult
+        What :func:`~stickslip_fast.simulate` returned (with ``sample_dt`` for
+        the time grid ``t``, ``y``; without it they are stored empty).
+    config : RunConfig or dict, optional
+        The run's configuration: a :class:`~stickslip_fast.config.RunConfig`
+        (its TOML mapping, title, notes, y0 and sample_dt are stored) or any
+        JSON-serialisable mapping (stored under ``"user"``).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    from . import __version__
+
+    path = Path(path)
+    system = result.system
+    cfg: dict[str, Any] = {
+        "system": system.to_dict(),
+        "settings": dict(result.settings),
+        "method": result.method,
+    }
+    title = notes = ""
+    if config is not None and hasattr(config, "raw") and hasattr(config, "system"):
+        cfg["source"] = config.raw
+        cfg["y0"] = None if config.y0 is None else np.asarray(config.y0).tolist()
+        cfg["sample_dt"] = config.sample_dt
+        title, notes = config.title, config.notes
+    elif isinstance(config, dict):
+        cfg["user"] = config
+        title = str(config.get("title", ""))
+        notes = str(config.get("notes", ""))
+    elif config is not None:
+        raise TypeError(f"config must be a RunConfig or a dict, got {type(config).__name__}")
+    if result.t is not None and len(result.t) > 1:
+        cfg.setdefault("sample_dt", float(result.t[1] - result.t[0]))
+    text, digest = config_digest(_jsonable(cfg))
+    n_state = len(result.state_names)
+    t = np.zeros(0) if result.t is None else np.asarray(result.t, dtype="f8")
+    y = np.zeros((0, n_state)) if result.y is None else np.asarray(result.y, dtype="f8")
+    tp = np.asarray(result.t_poincare, dtype="f8")
+    pts = np.asarray(result.poincare, dtype="f8").reshape(len(tp), n_state)
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".partial")
+    try:
+        with h5py.File(tmp, "w", libver="latest") as h5:
+            a = h5.attrs
+            a["schema_version"] = SCHEMA_VERSION
+            a["package_version"] = __version__
+            a["kind"] = "trajectory"
+            a["config"] = text
+            a["config_sha256"] = digest
+            a["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+            a["title"] = title
+            a["notes"] = notes
+            a["Conventions"] = "CF-1.8"
+            a["status"] = result.status
+            a["period"] = int(result.period)
+            a["method"] = result.method
+            for key in ("n_steps", "n_rejected", "n_crossings"):
+                a[key] = int(getattr(result, key))
+            a["t_final"] = float(result.t_final)
+            a["amplitude"] = float(result.amplitude)
+            for key, value in system.to_dict().items():
+                a[f"system.{key}"] = value
+
+            def scale(name: str, data: np.ndarray, long_name: str, **kw: Any) -> h5py.Dataset:
+                d = h5.create_dataset(name, data=data, **kw)
+                d.make_scale(name)
+                d.attrs["long_name"] = long_name
+                return d
+
+            st = scale("state", np.array(result.state_names, dtype=object), "state variable",
+                       dtype=h5py.string_dtype())  # fmt: skip
+            ts = scale("t", t, "time (nondimensional)", maxshape=(None,))
+            cs = scale("crossing", np.arange(len(tp), dtype="i4"),
+                       "index of the Poincare point, in time order", maxshape=(None,))  # fmt: skip
+            specs = {
+                "y": (y, (ts, st), "State sampled every sample_dt from t_transient"),
+                "t_poincare": (tp, (cs,), "Times of the Poincare points (local minima of x1)"),
+                "poincare": (pts, (cs, st), "Full state at each Poincare point"),
+                "final_state": (np.asarray(result.final_state, dtype="f8"), (st,),
+                                "State at t_end"),
+            }  # fmt: skip
+            for name, (data, dims, desc) in specs.items():
+                d = h5.create_dataset(
+                    name, data=data, maxshape=(None,) * data.ndim,
+                    compression="gzip" if data.size else None,
+                    compression_opts=1 if data.size else None,
+                )  # fmt: skip
+                for i, sc in enumerate(dims):
+                    d.dims[i].attach_scale(sc)
+                d.attrs["description"] = desc
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def read_trajectory(path: str | Path) -> dict[str, Any]:
+    """Read a file written by :func:`write_trajectory`.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    dict
+        ``t``, ``y``, ``t_poincare``, ``poincare``, ``final_state`` (arrays),
+        ``state_names``, ``status``, ``period``, ``title``, ``notes``,
+        ``config`` (the stored JSON, parsed), ``attrs`` (all root attributes),
+        ``system`` (a :class:`~stickslip_fast.System`) and ``result`` (a
+        :class:`~stickslip_fast.SimulationResult` rebuilt from the file).
+
+    Raises
+    ------
+    ValueError
+        If the file is not a trajectory file of this schema.
+    """
+    from .simulate import SimulationResult
+    from .system import System
+
+    with h5py.File(path, "r") as h5:
+        if h5.attrs.get("schema_version") != SCHEMA_VERSION or h5.attrs.get("kind") != "trajectory":
+            raise ValueError(f"{path}: not a stickslip_fast trajectory file")
+        attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
+        data = {name: h5[name][...] for name in ("t", "y", "t_poincare", "poincare", "final_state")}
+        names = [s.decode() if isinstance(s, bytes) else str(s) for s in h5["state"][...]]
+    config = json.loads(attrs["config"])
+    system = System.from_dict(config["system"])
+    result = SimulationResult(
+        system=system,
+        method=str(attrs["method"]),
+        state_names=names,
+        t_poincare=data["t_poincare"],
+        poincare=data["poincare"],
+        n_crossings=int(attrs["n_crossings"]),
+        period=int(attrs["period"]),
+        status=str(attrs["status"]),
+        n_steps=int(attrs["n_steps"]),
+        n_rejected=int(attrs["n_rejected"]),
+        t_final=float(attrs["t_final"]),
+        final_state=data["final_state"],
+        amplitude=float(attrs["amplitude"]),
+        t=data["t"],
+        y=data["y"],
+        settings=config["settings"],
+    )
+    return {
+        **data,
+        "state_names": names,
+        "status": result.status,
+        "period": result.period,
+        "title": str(attrs.get("title", "")),
+        "notes": str(attrs.get("notes", "")),
+        "config": config,
+        "attrs": attrs,
+        "system": system,
+        "result": result,
+    }

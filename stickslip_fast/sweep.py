@@ -21,7 +21,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from .io import PER_VALUE_FIELDS, SweepFile, SweepLayout, read_sweep
+from .io import ANALYSES, PER_VALUE_FIELDS, SweepFile, SweepLayout, read_sweep
 from .poincare import ORBIT_STATUSES, STATUS_NAMES
 from .simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD, resolve_settings
 from .system import PARAM_INDEX, SWEEPABLE, System
@@ -158,6 +158,8 @@ class SweepResult:
             import h5py
 
             with h5py.File(self.path, "r", libver="latest", swmr=True) as h5:
+                if name not in h5:
+                    raise AttributeError(f"{self.path} has no {name!r} dataset")
                 self._data[name] = h5[name][...]
         return self._data[name]
 
@@ -170,6 +172,9 @@ class SweepResult:
     n_rejected = property(lambda self: self._get("n_rejected"))
     n_crossings = property(lambda self: self._get("n_crossings"))
     status_code = property(lambda self: self._get("status"))
+    sync_error = property(lambda self: self._get("sync_error"))
+    lyapunov = property(lambda self: self._get("lyapunov"))
+    lyapunov_fit = property(lambda self: self._get("lyapunov_fit"))
 
     @property
     def status(self) -> np.ndarray:
@@ -341,6 +346,7 @@ def sweep(
     period_tol: float | None = None,
     title: str = "",
     notes: str = "",
+    analyses: Sequence[str] = (),
 ) -> SweepResult:
     """Sweep one or two System fields and record the Poincare points of every value.
 
@@ -382,6 +388,16 @@ def sweep(
         LocalCluster of ``n_workers`` processes.
     title, notes : str
         Stored in the file.
+    analyses : sequence of {"sync", "lyapunov"}
+        Extra per-value results, stored as extra datasets (see
+        :mod:`stickslip_fast.io`) and available as ``result.sync_error``,
+        ``result.lyapunov``, ``result.lyapunov_fit``. ``"sync"``:
+        :func:`analysis.sync_error` of the value's Poincare points (cheap; only
+        meaningful for N >= 2). ``"lyapunov"``: :func:`analysis.largest_lyapunov`
+        of the value's trajectory (same start state, t_end, t_transient, rtol,
+        atol); expensive (~2-5x the sweep) and computed in this process after
+        each unit. The list is part of the configuration (and its hash); the
+        other results do not depend on it.
 
     Returns
     -------
@@ -406,8 +422,11 @@ def sweep(
         period_tol,
     )  # fmt: skip
     y_init = system.initial_state(y0)
+    analyses = _normalise_analyses(analyses)
     branches = mode == "continuation-both"
-    layout = SweepLayout(names, axes, branches, settings["max_points"], system.state_names)
+    layout = SweepLayout(
+        names, axes, branches, settings["max_points"], system.state_names, analyses
+    )
     base = system.to_dict()
     for name in names:
         base[name] = None  # the base value of a swept field does not affect results
@@ -422,6 +441,8 @@ def sweep(
         "settings": {k: v for k, v in settings.items()},
         "y0": y_init.tolist(),
     }
+    if analyses:  # absent when empty, so files made before analyses existed still resume
+        config["analyses"] = list(analyses)
     grid = layout.grid_shape
     n_total = int(np.prod(grid))
 
@@ -450,6 +471,7 @@ def sweep(
                     k: np.full(grid, -1 if k == "status" else 0, dtype=v)
                     for k, v in PER_VALUE_FIELDS.items()
                 },
+                **{k: np.full(grid, np.nan) for k in layout.analysis_fields},
             }
 
         def write(index, data):
@@ -487,6 +509,8 @@ def sweep(
 
         runner = _run_local if backend == "local" else _dask_runner(scheduler, n_workers)
         for unit, res in runner(units, system, names, y_init, settings):
+            if analyses:
+                res = _run_analyses(unit, res, analyses, system, names, y_init, settings)
             n_written = _write_unit(unit, res, write)
             if bar is not None:
                 bar.update(n_written)
@@ -503,6 +527,60 @@ def sweep(
     )
     _warn_no_orbit(result, names, axes, branches)
     return result
+
+
+def _normalise_analyses(analyses) -> tuple[str, ...]:
+    if isinstance(analyses, str):
+        analyses = (analyses,)
+    try:
+        items = tuple(analyses)
+    except TypeError:
+        raise ValueError(f"analyses must be a sequence of names, got {analyses!r}") from None
+    unknown = [a for a in items if a not in ANALYSES]
+    if unknown:
+        raise ValueError(f"unknown analyses {unknown}; choose from {sorted(ANALYSES)}")
+    return tuple(a for a in ANALYSES if a in items)  # canonical order, no duplicates
+
+
+def _unit_starts(unit: _Unit, res: dict, y0: np.ndarray) -> np.ndarray:
+    """The initial state of every trajectory of a unit (shape of the value axes + state)."""
+    if unit.kind == "restart":
+        return np.broadcast_to(y0, (len(unit.values), y0.size))
+    final = res["final_state"]
+    starts = np.empty_like(final)
+    starts[:, 0] = unit.y_starts
+    starts[:, 1:] = final[:, :-1]
+    bad = ~np.all(np.isfinite(starts), axis=-1)
+    starts[bad] = y0  # as the continuation kernel: restart from y0 after a failure
+    return starts
+
+
+def _run_analyses(unit: _Unit, res: dict, analyses, system, names, y0, settings) -> dict:
+    """Add the requested analysis fields to a unit's results (values axes first)."""
+    from .analysis import largest_lyapunov, sync_error
+
+    res = dict(res)
+    shape = res["count"].shape
+    vals = np.asarray(unit.values, dtype=float).reshape(-1, len(names))
+    if "sync" in analyses:
+        pts = res["points"].reshape(-1, *res["points"].shape[-2:])
+        res["sync_error"] = np.array(
+            [sync_error(p, system.n_oscillators) for p in pts], dtype=float
+        ).reshape(shape)
+    if "lyapunov" in analyses:
+        starts = _unit_starts(unit, res, y0).reshape(-1, y0.size)
+        lam = np.full(len(vals), np.nan)
+        fit = np.full(len(vals), np.nan)
+        for i, (row, start) in enumerate(zip(vals, starts)):
+            sys_i = system.replace(**{n: float(v) for n, v in zip(names, row)})
+            ly = largest_lyapunov(
+                sys_i, settings["t_end"], settings["t_transient"], y0=start,
+                rtol=settings["rtol"], atol=settings["atol"],
+            )  # fmt: skip
+            lam[i], fit[i] = ly.exponent, ly.exponent_fit
+        res["lyapunov"] = lam.reshape(shape)
+        res["lyapunov_fit"] = fit.reshape(shape)
+    return res
 
 
 def _continuation_units(axes, branches, done, chunk, y0, final_state_at) -> Iterator[_Unit]:
@@ -599,5 +677,5 @@ def load_sweep(path: str | Path) -> SweepResult:
         system=system,
         settings=cfg["settings"],
         path=Path(path),
-        _data={k: data[k] for k in _DATA_FIELDS},
+        _data={**{k: data[k] for k in _DATA_FIELDS}, **data["analyses"]},
     )

@@ -1,0 +1,345 @@
+"""Plot a sweep file: bifurcation diagram (1-D sweeps) or period map (2-D sweeps).
+
+Usage::
+
+    python scripts/plot_bifurcation.py OUT.h5 -o fig.png [--vars x1,phi1] [--period]
+
+Reads only the HDF5 file written by :func:`stickslip_fast.sweep` (it simulates
+nothing). 1-D sweeps: one panel per variable kind (x, phi, dx, ...) with the
+Poincare points against the swept parameter as small rasterized dots; for
+N >= 2 the disks (x1, x2, ...) are overlaid in different colours on the same
+panel; for mode "continuation-both" the up and down branches are overlaid in two
+colours (hysteresis). Values without an orbit are never drawn as points:
+equilibria ("steady sliding") and stalled motors are drawn as a line at the
+final state, failures as ticks on the lower edge. ``--period`` adds a panel with
+the detected period, and a file holding a ``sync_error`` dataset gets a panel
+for it. 2-D sweeps: a period map (``pcolormesh``) coloured by period, with
+"no period", equilibrium, stalled and failed values in distinct colours.
+
+The output format follows the extension (.png, .pdf, .svg).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from stickslip_fast.io import read_sweep  # noqa: E402
+from stickslip_fast.poincare import STATUS_NAMES  # noqa: E402
+
+__all__ = ["plot_sweep", "plot_bifurcation", "plot_period_map", "main"]
+
+LABELS = {
+    "x": "$x$",
+    "dx": r"$\dot x$",
+    "phi": r"$\varphi$",
+    "dphi": r"$\dot\varphi$",
+    "vb": "$v_b$",
+}
+PARAM_LABELS = {"eta": r"$\eta$", "k12": "$k_{12}$", "vb": "$v_b$", "vb0": "$v_{b0}$"}
+#: How values without an orbit are drawn: (label, colour).
+REST_STYLE = {
+    "equilibrium": ("steady sliding (equilibrium)", "0.55"),
+    "stalled": ("stalled motor", "tab:red"),
+}
+FAIL_COLOUR = "black"
+DISK_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:purple")
+BRANCH_COLOURS = {"up": "tab:blue", "down": "tab:orange"}
+
+
+def _split(name: str) -> tuple[str, int]:
+    """'phi2' -> ('phi', 2); 'vb' -> ('vb', 0)."""
+    m = re.fullmatch(r"([a-z]+?)(\d+)", name)
+    return (m.group(1), int(m.group(2))) if m else (name, 0)
+
+
+def _default_vars(state_names: Sequence[str]) -> list[str]:
+    n = sum(1 for s in state_names if _split(s)[0] == "x")
+    return [f"x{i}" for i in range(1, n + 1)] + [f"phi{i}" for i in range(1, n + 1)]
+
+
+def _status_names(codes: np.ndarray) -> np.ndarray:
+    names = np.array((*STATUS_NAMES, "missing"), dtype=object)
+    return names[np.where(codes < 0, len(STATUS_NAMES), codes)]
+
+
+def _title(data: dict[str, Any]) -> str:
+    title = str(data["attrs"].get("title", "")) or Path(str(data.get("path", ""))).name
+    return title
+
+
+def plot_bifurcation(
+    data: dict[str, Any],
+    variables: Sequence[str] | None = None,
+    *,
+    period_panel: bool = False,
+    title: str | None = None,
+    markersize: float = 1.2,
+) -> plt.Figure:
+    """Bifurcation diagram of a 1-D sweep, as read by :func:`read_sweep`.
+
+    Parameters
+    ----------
+    data : dict
+        The result of :func:`stickslip_fast.io.read_sweep`.
+    variables : sequence of str, optional
+        State names to draw (default: x_i and phi_i of every disk). Names of
+        one kind (x1, x2) share a panel.
+    period_panel : bool
+        Add a panel with the detected period of every value.
+    title : str, optional
+        Figure title (default: the file's title).
+    markersize : float
+        Size of the Poincare dots (points).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    names = data["state_names"]
+    variables = list(variables) if variables else _default_vars(names)
+    for v in variables:
+        if v not in names:
+            raise ValueError(f"unknown variable {v!r}; the file has {names}")
+    kinds: list[str] = []
+    for v in variables:
+        k = _split(v)[0]
+        if k not in kinds:
+            kinds.append(k)
+    param = data["param"][0]
+    axis = np.asarray(data["axes"][0])
+    branches = ["up", "down"] if data["branches"] else [None]
+    extra = []
+    if period_panel:
+        extra.append("period")
+    if "sync_error" in data.get("analyses", {}):
+        extra.append("sync_error")
+    if "lyapunov_fit" in data.get("analyses", {}):
+        extra.append("lyapunov_fit")
+    n_pan = len(kinds) + len(extra)
+    ratios = [3.0] * len(kinds) + [1.2] * len(extra)
+    fig, axs = plt.subplots(
+        n_pan, 1, sharex=True, figsize=(7.0, 2.3 * len(kinds) + 1.1 * len(extra) + 0.6),
+        gridspec_kw={"height_ratios": ratios}, squeeze=False,
+    )  # fmt: skip
+    axs = axs[:, 0]
+    handles: list[dict[str, Any]] = [{} for _ in range(n_pan)]
+    for b_i, branch in enumerate(branches):
+        sl = (b_i,) if branch is not None else ()
+        pts = data["points"][sl]
+        status = _status_names(data["status"][sl])
+        final = data["final_state"][sl]
+        for v in variables:
+            kind, disk = _split(v)
+            ax = axs[kinds.index(kind)]
+            col = names.index(v)
+            if branch is not None:
+                colour = BRANCH_COLOURS[branch]
+                if len([w for w in variables if _split(w)[0] == kind]) > 1:
+                    colour = DISK_COLOURS[(2 * max(disk - 1, 0) + b_i) % len(DISK_COLOURS)]
+                label = f"{v}, {branch} branch"
+            else:
+                colour = DISK_COLOURS[max(disk - 1, 0) % len(DISK_COLOURS)]
+                label = v
+            vals = pts[..., col]
+            xs = np.broadcast_to(axis[:, None], vals.shape)
+            ok = np.isfinite(vals)
+            h = ax.scatter(xs[ok], vals[ok], s=markersize**2, c=colour, marker="o",
+                           linewidths=0, rasterized=True, alpha=0.8 if branch == "down" else 1.0,
+                           label=label)  # fmt: skip
+            handles[kinds.index(kind)].setdefault(f"pts:{label}", h)
+            for st, (st_label, st_colour) in REST_STYLE.items():
+                mask = status == st
+                if not np.any(mask):
+                    continue
+                y = np.where(mask, final[..., col], np.nan)
+                (line,) = ax.plot(axis, y, color=st_colour, lw=2.5, alpha=0.6,
+                                  solid_capstyle="butt", label=st_label)  # fmt: skip
+                lone = mask & ~np.roll(mask, 1) & ~np.roll(mask, -1)  # isolated values
+                ax.plot(axis[lone], y[lone], ls="none", marker="_", ms=6, mew=2.5,
+                        color=st_colour, alpha=0.6)  # fmt: skip
+                handles[kinds.index(kind)].setdefault(f"rest:{st_label}", line)
+            fail = ~np.isin(status, ("ok", *REST_STYLE))
+            if np.any(fail):
+                tr = ax.get_xaxis_transform()
+                f = ax.plot(axis[fail], np.zeros(int(fail.sum())), ls="none", marker="|",
+                            ms=8, color=FAIL_COLOUR, transform=tr,
+                            label="no orbit / failed (" + ", ".join(sorted(set(status[fail]))) + ")")  # fmt: skip
+                handles[kinds.index(kind)].setdefault("fail", f[0])
+        for e, name in enumerate(extra):
+            ax = axs[len(kinds) + e]
+            if name == "period":
+                per = data["period"][sl].astype(float)
+                per[(status != "ok") | (per <= 0)] = np.nan
+                ax.plot(axis, per, ls="none", marker=".", ms=2,
+                        color=BRANCH_COLOURS.get(branch, "k") if branch else "k")  # fmt: skip
+                nop = (status == "ok") & (data["period"][sl] == 0)
+                if np.any(nop):
+                    h = ax.plot(axis[nop], np.zeros(int(nop.sum())), ls="none", marker="x",
+                                ms=3, color="tab:red", label="orbit, no period <= 64")  # fmt: skip
+                    handles[len(kinds) + e].setdefault("nop", h[0])
+                ax.yaxis.get_major_locator().set_params(integer=True)
+                ax.set_ylabel("period")
+            else:
+                y = data["analyses"][name][sl]
+                ax.plot(axis, y, ls="none", marker=".", ms=2,
+                        color=BRANCH_COLOURS.get(branch, "k") if branch else "k")  # fmt: skip
+                ax.set_ylabel("sync error" if name == "sync_error" else r"$\lambda_1$")
+    for k, kind in enumerate(kinds):
+        axs[k].set_ylabel(LABELS.get(kind, kind) + r" at min $x_1$")
+    axs[-1].set_xlabel(PARAM_LABELS.get(param, param))
+    axs[0].set_title(_title(data) if title is None else title, fontsize=9)
+    if "period" in extra:
+        per_ax = axs[len(kinds) + extra.index("period")]
+        per_ax.set_ylim(-1, max(2.0, float(np.max(data["period"], initial=0))) + 1)
+    for ax, hd in zip(axs, handles):
+        if hd:
+            leg = ax.legend(handles=list(hd.values()), fontsize=7, loc="best", markerscale=4,
+                            framealpha=0.8)  # fmt: skip
+            for lh in leg.legend_handles:
+                if hasattr(lh, "set_alpha"):
+                    lh.set_alpha(1.0)
+    fig.tight_layout()
+    return fig
+
+
+def plot_period_map(data: dict[str, Any], title: str | None = None) -> plt.Figure:
+    """Period map of a 2-D sweep: colour = period, statuses in distinct colours.
+
+    Parameters
+    ----------
+    data : dict
+        The result of :func:`stickslip_fast.io.read_sweep` for a 2-D sweep
+        (the "up" branch is drawn if the file has branches).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    p1, p2 = data["param"]
+    a1, a2 = (np.asarray(a) for a in data["axes"])
+    sl = (0,) if data["branches"] else ()
+    status = _status_names(data["status"][sl])
+    period = data["period"][sl].astype(float)
+    has_period = (status == "ok") & (period > 0)
+    per = np.where(has_period, period, np.nan)
+    # categorical layer: 0 none, 1 no period detected, 2 equilibrium, 3 stalled, 4 failed, 5 missing
+    cat = np.full(status.shape, np.nan)
+    cat[(status == "ok") & (period <= 0)] = 1
+    cat[status == "equilibrium"] = 2
+    cat[status == "stalled"] = 3
+    cat[~np.isin(status, ("ok", "equilibrium", "stalled", "missing"))] = 4
+    cat[status == "missing"] = 5
+    cat_colours = ["black", "0.7", "tab:red", "magenta", "white"]
+    cat_labels = ["orbit, no period <= 64", "steady sliding (equilibrium)", "stalled motor",
+                  "failed", "not computed"]  # fmt: skip
+
+    def edges(a: np.ndarray) -> np.ndarray:
+        if a.size == 1:
+            return np.array([a[0] - 0.5, a[0] + 0.5])
+        mid = 0.5 * (a[1:] + a[:-1])
+        return np.concatenate([[2 * a[0] - mid[0]], mid, [2 * a[-1] - mid[-1]]])
+
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    top = int(np.nanmax(per)) if np.any(has_period) else 1
+    bounds = np.arange(0.5, top + 1.5)
+    cmap = plt.get_cmap("viridis", len(bounds) - 1)
+    mesh = ax.pcolormesh(edges(a1), edges(a2), per.T, cmap=cmap,
+                         norm=BoundaryNorm(bounds, cmap.N), shading="flat")  # fmt: skip
+    ccmap = ListedColormap(cat_colours)
+    ax.pcolormesh(edges(a1), edges(a2), np.ma.masked_invalid(cat.T), cmap=ccmap,
+                  norm=BoundaryNorm(np.arange(0.5, 6.5), ccmap.N), shading="flat")  # fmt: skip
+    cb = fig.colorbar(mesh, ax=ax)
+    cb.set_label("period")
+    if top <= 12:
+        cb.set_ticks(np.arange(1, top + 1))
+    present = [i for i in range(5) if np.any(cat == i + 1)]
+    if present:
+        ax.legend(handles=[Patch(facecolor=cat_colours[i], edgecolor="k", label=cat_labels[i])
+                           for i in present], fontsize=7, loc="upper left",
+                  bbox_to_anchor=(0.0, -0.12), ncol=3, frameon=False)  # fmt: skip
+    ax.set_xlabel(PARAM_LABELS.get(p1, p1))
+    ax.set_ylabel(PARAM_LABELS.get(p2, p2))
+    ax.set_title(_title(data) if title is None else title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_sweep(
+    path: str | Path,
+    out: str | Path,
+    variables: Sequence[str] | None = None,
+    *,
+    period_panel: bool = False,
+    title: str | None = None,
+    dpi: int = 150,
+) -> Path:
+    """Read a sweep file and write its figure to ``out`` (format from the extension).
+
+    Parameters
+    ----------
+    path : str or Path
+        Sweep file written by :func:`stickslip_fast.sweep`.
+    out : str or Path
+        Image file (.png, .pdf, ...).
+    variables : sequence of str, optional
+        State names for a 1-D sweep (default x_i, phi_i).
+    period_panel : bool
+        Add a period panel (1-D sweeps).
+    title : str, optional
+    dpi : int
+        Resolution of raster output.
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
+    data = read_sweep(path)
+    data["path"] = str(path)
+    if len(data["param"]) == 2:
+        fig = plot_period_map(data, title=title)
+    else:
+        fig = plot_bifurcation(data, variables, period_panel=period_panel, title=title)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi)
+    plt.close(fig)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry point."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("file", help="sweep result file (HDF5)")
+    p.add_argument("-o", "--output", required=True, help="image file (.png, .pdf)")
+    p.add_argument("--vars", help="comma-separated state names, e.g. x1,phi1 or x1,x2")
+    p.add_argument("--period", action="store_true", help="add a period panel")
+    p.add_argument("--title", help="figure title (default: the file's title)")
+    p.add_argument("--dpi", type=int, default=150)
+    args = p.parse_args(argv)
+    variables = [v.strip() for v in args.vars.split(",")] if args.vars else None
+    out = plot_sweep(args.file, args.output, variables, period_panel=args.period,
+                     title=args.title, dpi=args.dpi)  # fmt: skip
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,189 @@
+"""Trajectory files, sweep analyses and the plotting scripts (images from small HDF5 files)."""
+
+import json
+import os
+import subprocess
+import sys
+import warnings
+
+import h5py
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.analysis import largest_lyapunov, sync_error
+from stickslip_fast.config import load_config
+from stickslip_fast.io import ConfigMismatchError, read_trajectory, write_trajectory
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCRIPTS = os.path.join(ROOT, "scripts")
+sys.path.insert(0, SCRIPTS)
+
+import make_figures  # noqa: E402
+import plot_bifurcation  # noqa: E402
+import plot_timeseries  # noqa: E402
+
+ASYM = ssf.System.preset("asymmetric")
+TWO = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=2)
+Y0_TWO = [0, 0, 0, 0, 0.01, 0.01, 0.01, 0.01, 0]
+KW = dict(t_end=400.0, t_transient=200.0, max_points=16)
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*gave no orbit.*")
+        yield
+
+
+def _check_png(path):
+    """A real, non-trivial image: PNG signature, > 5 kB, pixels that vary."""
+    import matplotlib.image as mpimg
+
+    with open(path, "rb") as fh:
+        assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert os.path.getsize(path) > 5000
+    img = mpimg.imread(path)
+    assert img.ndim == 3 and img.shape[0] > 100 and img.shape[1] > 100
+    assert float(img[..., :3].std()) > 0.02
+    assert len(np.unique(img[..., :3].reshape(-1, 3), axis=0)) > 20
+
+
+# ------------------------------------------------------------- trajectory files
+def test_trajectory_roundtrip_and_xarray(tmp_path):
+    res = ssf.simulate(ASYM.replace(eta=9.99), 600.0, 300.0, sample_dt=0.5)
+    path = write_trajectory(tmp_path / "run.h5", res, {"title": "t"})
+    back = read_trajectory(path)
+    np.testing.assert_array_equal(back["t"], res.t)
+    np.testing.assert_array_equal(back["y"], res.y)
+    np.testing.assert_array_equal(back["poincare"], res.poincare)
+    np.testing.assert_array_equal(back["t_poincare"], res.t_poincare)
+    assert back["status"] == res.status and back["period"] == res.period
+    assert back["system"] == res.system and back["title"] == "t"
+    assert back["result"].n_steps == res.n_steps
+    with h5py.File(path, "r") as h5:
+        assert h5.attrs["schema_version"] == 1 and h5.attrs["kind"] == "trajectory"
+        assert json.loads(h5.attrs["config"])["settings"]["t_end"] == 600.0
+        assert h5.attrs["package_version"]
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        assert ds["y"].dims == ("t", "state")
+        assert list(ds["state"].values) == res.state_names
+        np.testing.assert_array_equal(ds["t"].values, res.t)
+        assert ds["poincare"].dims == ("crossing", "state")
+
+
+def test_trajectory_without_samples_and_stalled(tmp_path):
+    sym = ssf.System.preset("symmetric", drive="dc-motor", eta=9.99)
+    res = ssf.simulate(sym, 300.0, 150.0)
+    assert res.status in ("stalled", "no-crossings")
+    back = read_trajectory(write_trajectory(tmp_path / "s.h5", res))
+    assert back["t"].shape == (0,) and back["y"].shape == (0, 5)
+    assert back["poincare"].shape == (0, 5) and back["status"] == res.status
+
+
+def test_cli_simulate_writes_trajectory(tmp_path):
+    cfg = tmp_path / "run.toml"
+    cfg.write_text(
+        'title = "cli run"\n[system]\npreset = "asymmetric"\neta = 9.99\n'
+        "[integration]\nt_end = 400.0\nt_transient = 200.0\n[simulate]\nsample_dt = 0.25\n"
+    )
+    out = tmp_path / "run.h5"
+    r = subprocess.run(
+        [sys.executable, "-m", "stickslip_fast.cli", "simulate", str(cfg), "-o", str(out)],
+        cwd=ROOT, capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    back = read_trajectory(out)
+    assert back["title"] == "cli run"
+    assert back["t"][1] - back["t"][0] == pytest.approx(0.25)
+    assert back["config"]["source"]["system"]["eta"] == 9.99
+    direct = ssf.simulate(ASYM.replace(eta=9.99), 400.0, 200.0, sample_dt=0.25)
+    np.testing.assert_array_equal(back["poincare"], direct.poincare)
+
+
+# ------------------------------------------------------------------ analyses
+def test_sweep_sync_analysis_matches_direct_calls_and_changes_nothing(tmp_path):
+    etas = np.array([1.5, 6.0, 8.0])
+    plain = ssf.sweep(TWO, "eta", etas, y0=Y0_TWO, **KW)
+    path = tmp_path / "sync.h5"
+    res = ssf.sweep(TWO, "eta", etas, y0=Y0_TWO, analyses=("sync",), out=path, **KW)
+    for f in ("points", "t_points", "period", "status_code", "final_state", "n_steps"):
+        np.testing.assert_array_equal(getattr(plain, f), getattr(res, f))
+    want = [sync_error(plain.points[i], 2) for i in range(len(etas))]
+    np.testing.assert_array_equal(res.sync_error, want)
+    np.testing.assert_array_equal(ssf.load_sweep(path).sync_error, want)
+    with h5py.File(path, "r") as h5:
+        assert h5["sync_error"].dims[0][0].name == "/eta"
+        assert json.loads(h5.attrs["config"])["analyses"] == ["sync"]
+    with pytest.raises(AttributeError):
+        _ = plain.sync_error
+    # the analyses list is part of the configuration: no silent mix on resume
+    with pytest.raises(ConfigMismatchError, match="analyses"):
+        ssf.sweep(TWO, "eta", etas, y0=Y0_TWO, out=path, **KW)
+    with pytest.raises(ValueError, match="unknown analyses"):
+        ssf.sweep(TWO, "eta", etas, analyses=("chaos",), **KW)
+
+
+def test_sweep_lyapunov_analysis_matches_direct_calls():
+    kw = dict(t_end=300.0, t_transient=150.0, max_points=8)
+    etas = np.array([5.0, 9.99])
+    res = ssf.sweep(ASYM, "eta", etas, analyses=("lyapunov",), **kw)
+    for i, eta in enumerate(etas):
+        ly = largest_lyapunov(ASYM.replace(eta=eta), 300.0, 150.0, rtol=1e-9, atol=1e-11)
+        assert res.lyapunov[i] == ly.exponent
+        assert res.lyapunov_fit[i] == ly.exponent_fit
+    # continuation: each value's exponent is of its own trajectory (previous final state)
+    cont = ssf.sweep(ASYM, "eta", etas, mode="continuation", analyses=("lyapunov",), **kw)
+    ly = largest_lyapunov(ASYM.replace(eta=9.99), 300.0, 150.0, y0=cont.final_state[0],
+                          rtol=1e-9, atol=1e-11)  # fmt: skip
+    assert cont.lyapunov[1] == ly.exponent
+
+
+# ------------------------------------------------------------------- plots
+def test_plot_scripts_make_images_from_small_files(tmp_path):
+    files = {}
+    files["one"] = tmp_path / "one.h5"
+    ssf.sweep(ASYM, "eta", np.linspace(1.0, 10.0, 6), out=files["one"], **KW)
+    files["both"] = tmp_path / "both.h5"
+    ssf.sweep(ASYM, "eta", np.linspace(5.0, 10.0, 4), mode="continuation-both",
+              out=files["both"], **KW)  # fmt: skip
+    files["map"] = tmp_path / "map.h5"
+    ssf.sweep(ASYM, ("eta", "k12"), (np.linspace(1, 10, 4), np.linspace(-0.8, 0.0, 3)),
+              out=files["map"], **KW)  # fmt: skip
+    files["two"] = tmp_path / "two.h5"
+    ssf.sweep(TWO, "eta", np.array([1.5, 8.0, 9.99]), y0=Y0_TWO, analyses=("sync",),
+              out=files["two"], **KW)  # fmt: skip
+    for name, path in files.items():
+        png = tmp_path / f"{name}.png"
+        assert plot_bifurcation.main([str(path), "-o", str(png), "--period"]) == 0
+        _check_png(png)
+    png = tmp_path / "vars.png"
+    plot_bifurcation.plot_sweep(files["two"], png, ["x1", "x2"])
+    _check_png(png)
+    pdf = tmp_path / "one.pdf"
+    plot_bifurcation.plot_sweep(files["one"], pdf, ["x1", "phi1"])
+    assert pdf.read_bytes()[:4] == b"%PDF"
+    with pytest.raises(ValueError, match="unknown variable"):
+        plot_bifurcation.plot_sweep(files["one"], tmp_path / "x.png", ["x2"])
+
+    run = tmp_path / "run.h5"
+    write_trajectory(run, ssf.simulate(TWO.replace(eta=8.0), 400.0, 200.0, y0=Y0_TWO,
+                                       sample_dt=0.05))  # fmt: skip
+    png = tmp_path / "run.png"
+    assert plot_timeseries.main([str(run), "-o", str(png)]) == 0
+    _check_png(png)
+
+
+def test_make_figures_quick_makes_one_file_per_figure(tmp_path):
+    made = make_figures.make_figures(tmp_path, quick=True, verbose=False)
+    want = {f"{n:02d}" for n in (*range(2, 8), *range(9, 19))}
+    assert set(made) == want
+    assert sorted(p.name for p in tmp_path.glob("fig*.png")) == sorted(f"fig{n}.png" for n in want)
+    for path in made.values():
+        assert path.stat().st_size > 5000
+    # every config in data/ is used
+    used = {c for f in make_figures.FIGURES for c in f.configs}
+    assert used == {p for p in os.listdir(os.path.join(ROOT, "data")) if p.startswith("fig")}
+    load_config(os.path.join(ROOT, "data", sorted(used)[0]))
