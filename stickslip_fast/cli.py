@@ -258,7 +258,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (ConfigError, ValueError) as exc:
+    except (ConfigError, ValueError, ImportError) as exc:  # ImportError: a missing extra
         print(f"stickslip-fast: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

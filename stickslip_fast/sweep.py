@@ -378,14 +378,19 @@ def sweep(
         HDF5 file to stream into (see docs/file-format.md). Re-running the same
         sweep on the same file resumes it; a different configuration is refused.
     chunk_size : int, optional
-        Values per unit of work (default 32 per thread); results do not depend on it.
+        Values per unit of work (default 32 per thread; 8 per task with
+        ``backend="dask"``); results do not depend on it.
     threads : int, optional
         Numba threads for this sweep (default: all). Results do not depend on it.
     progress : bool, optional
         tqdm progress bar; default: only when stderr is a terminal.
     backend : {"local", "dask"}
-        Where units run. ``"dask"`` uses ``scheduler`` (an address) or starts a
-        LocalCluster of ``n_workers`` processes.
+        Where units run. ``"dask"`` (extra ``stickslip_fast[dask]``) uses
+        ``scheduler`` (an address such as ``"tcp://host:8786"``) or starts a
+        LocalCluster of ``n_workers`` single-threaded processes (default: one
+        per core) for this sweep. Results arrive in any order and only this
+        process writes ``out``; continuation rounds run one after another.
+        Results are bit-identical to ``"local"``. See docs/distributed.md.
     title, notes : str
         Stored in the file.
     analyses : sequence of {"sync", "lyapunov"}
@@ -445,11 +450,13 @@ def sweep(
         config["analyses"] = list(analyses)
     grid = layout.grid_shape
     n_total = int(np.prod(grid))
+    # resolved before any file is touched: a missing extra or a bad address fails first
+    runner = _run_local if backend == "local" else _dask_runner(scheduler, n_workers)
 
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))
         if chunk_size is None:
-            chunk_size = 32 * nthreads
+            chunk_size = getattr(runner, "default_chunk_size", 32 * nthreads)
         elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
             raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
         if out is not None:
@@ -507,8 +514,11 @@ def sweep(
         else:
             units = _continuation_units(axes, branches, done, chunk_size, y_init, final_state_at)
 
-        runner = _run_local if backend == "local" else _dask_runner(scheduler, n_workers)
-        for unit, res in runner(units, system, names, y_init, settings):
+        # closing(): a failure while writing also stops the backend (cancels its tasks)
+        results = stack.enter_context(
+            contextlib.closing(runner(units, system, names, y_init, settings))
+        )
+        for unit, res in results:
             if analyses:
                 res = _run_analyses(unit, res, analyses, system, names, y_init, settings)
             n_written = _write_unit(unit, res, write)
@@ -656,7 +666,8 @@ def _warn_no_orbit(result: SweepResult, names, axes, branches) -> None:
     )
 
 
-def _dask_runner(scheduler, n_workers):
+def _dask_runner(scheduler: str | None, n_workers: int | None):
+    """The Dask runner (:func:`stickslip_fast.backends.dask_runner`), imported on demand."""
     from .backends import dask_runner
 
     return dask_runner(scheduler, n_workers)
