@@ -15,9 +15,6 @@ if str(ROOT) not in sys.path:  # benchmark this checkout, not an installed copy
     sys.path.insert(0, str(ROOT))
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast.simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD, resolve_settings  # noqa: E402
-from stickslip_fast.system import PARAM_INDEX  # noqa: E402
-from stickslip_fast.trajectory import METHODS, sweep_chunk  # noqa: E402
 
 STATUS = np.array(ssf.STATUS_NAMES + ("not-run",))
 
@@ -90,66 +87,5 @@ def best_time(fn, max_repeats: int = 3, budget: float = 1.0):
     return best, res
 
 
-class StandinSweepResult:
-    """The fields of the planned ``ssf.SweepResult`` that the benchmarks read."""
-
-    def __init__(self, values, out):
-        points, t_points, count, period, status, n_steps, n_rejected, n_crossings, final = out
-        self.values = values
-        self.points = points
-        self.t_points = t_points
-        self.count = count
-        self.period = period
-        self.status = STATUS[status]
-        self.n_steps = n_steps
-        self.n_rejected = n_rejected
-        self.n_crossings = n_crossings
-        self.final_state = final
-
-
-def sweep_standin(
-    system,
-    param,
-    values,
-    *,
-    t_end,
-    t_transient=0.0,
-    threads=None,
-    chunk_size=None,
-    out=None,
-    progress=False,
-    method="rodas5p",
-    rtol=None,
-    atol=None,
-    max_points=256,
-):
-    """Stand-in for ``ssf.sweep`` (same call shape) on the compiled ``sweep_chunk`` kernel."""
-    import numba
-
-    if out is not None:
-        raise NotImplementedError("the stand-in sweep cannot write files (needs ssf.sweep)")
-    s = resolve_settings(
-        method, t_end, t_transient, rtol, atol, None, max_points, None,
-        DEFAULT_EQUILIBRIUM_TOL, None,
-    )  # fmt: skip
-    values = np.asarray(values, dtype=float)
-    params = np.tile(system.to_array(), (values.size, 1))
-    params[:, PARAM_INDEX[param]] = values
-    y0s = np.zeros((values.size, system.n_state))
-    old = numba.get_num_threads()
-    if threads is not None:
-        numba.set_num_threads(threads)
-    try:
-        res = sweep_chunk(
-            METHODS.index(method), y0s, params, system.n_oscillators, system.is_dc_motor,
-            s["t_end"], s["t_transient"], s["rtol"], s["atol"], s["h"], s["max_steps"],
-            s["equilibrium_tol"], s["period_tol"], MAX_PERIOD, s["max_points"],
-        )  # fmt: skip
-    finally:
-        numba.set_num_threads(old)
-    return StandinSweepResult(values, res)
-
-
-# The one line to switch: the real API once it is on this branch, else the stand-in.
-run_sweep = getattr(ssf, "sweep", None) or sweep_standin
-SWEEP_IMPL = "stickslip_fast.sweep" if run_sweep is not sweep_standin else "standin:sweep_chunk"
+run_sweep = ssf.sweep
+SWEEP_IMPL = "stickslip_fast.sweep"

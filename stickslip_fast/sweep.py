@@ -82,11 +82,10 @@ def compute_restart_chunk(
     with the same compiled kernels, whatever the thread count.
     """
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    # trajectory costs vary a lot with the parameter: hand out values one at a time
-    with numba.parallel_chunksize(1):
-        res = sweep_chunk(
-            METHODS.index(settings["method"]), y0, rows, *_kernel_args(system, settings)
-        )
+    res = sweep_chunk(
+        METHODS.index(settings["method"]), y0, rows, *_kernel_args(system, settings),
+        numba.get_num_threads(),
+    )  # fmt: skip
     return _pack(*res)
 
 
@@ -104,11 +103,10 @@ def compute_continuation_chunk(
     previous one's final state (``y0`` if that was not finite).
     """
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    with numba.parallel_chunksize(1):
-        res = continuation_chunk(
+    res = continuation_chunk(
         METHODS.index(settings["method"]), y0, np.ascontiguousarray(y_starts), rows,
-            *_kernel_args(system, settings),
-        )  # fmt: skip
+        *_kernel_args(system, settings),
+    )  # fmt: skip
     return _pack(*res)
 
 

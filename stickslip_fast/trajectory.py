@@ -361,12 +361,13 @@ def sweep_chunk(
     period_tol: float,
     max_period: int,
     max_points: int,
+    lanes: int,
 ):
     """Restart mode: one independent trajectory from ``y0`` per row of ``params``.
 
     ``params`` is (n_values, N_PARAMS). Each trajectory is sequential and
-    independent, so results do not depend on the thread count or on how values
-    are grouped into chunks. Returns (points (n, max_points, n_state),
+    independent, so results do not depend on the thread count, on ``lanes`` or
+    on how values are grouped into chunks. Returns (points (n, max_points, n_state),
     t_points (n, max_points), ints (n, 6) with columns SWEEP_INT_FIELDS,
     final_state (n, n_state)); points are in time order and NaN-padded.
     """
@@ -376,12 +377,18 @@ def sweep_chunk(
     t_points = np.full((nv, max_points), np.nan)
     ints = np.zeros((nv, 6), dtype=np.int64)
     final_state = np.full((nv, n), np.nan)
-    for v in prange(nv):
-        _run_value(
-            method, y0, params[v], n_osc, dc, t_end, t_transient, rtol, atol, h_fixed,
-            max_steps, equilibrium_tol, period_tol, max_period, max_points,
-            points[v], t_points[v], ints[v], final_state[v],
-        )  # fmt: skip
+    # prange splits its range into contiguous blocks, one per thread. Neighbouring
+    # values cost about the same (a block of cheap equilibria next to a block of
+    # long orbits), so each thread takes an interleaved lane of values instead:
+    # pass lanes = the thread count. Results do not depend on it.
+    lanes = max(1, min(nv, lanes))
+    for lane in prange(lanes):
+        for v in range(lane, nv, lanes):
+            _run_value(
+                method, y0, params[v], n_osc, dc, t_end, t_transient, rtol, atol, h_fixed,
+                max_steps, equilibrium_tol, period_tol, max_period, max_points,
+                points[v], t_points[v], ints[v], final_state[v],
+            )  # fmt: skip
     return points, t_points, ints, final_state
 
 
