@@ -2,8 +2,11 @@
 
 Each stepper takes its tableau as arrays (see :mod:`stickslip_fast.tableaus`),
 so another tableau of the same family needs no new code. A step writes the new
-state, an error estimate and the coefficients of its dense output; dense
-output is evaluated separately by :func:`dense_value` / :func:`dense_state`.
+state and an error estimate and leaves its stages in K. Dense output is kept
+apart from stepping: :func:`erk_dense` / :func:`rosenbrock_dense` build its
+coefficients from the stages only for steps that need them (a Poincare crossing
+or a sample inside the step), and :func:`dense_value` / :func:`dense_state`
+evaluate it.
 
 Dense-output kinds
 ------------------
@@ -100,11 +103,11 @@ def accepted_step_factor(en: float, err_prev: float, q: float, after_reject: boo
 
 # --------------------------------------------------------------------------- ERK
 @njit(**_JIT)
-def erk_step(A, b, b_err, P, y0, h, p, n_osc, dc, K, ytmp, y1, err, D) -> None:
+def erk_step(A, b, b_err, y0, h, p, n_osc, dc, K, ytmp, y1, err) -> None:
     """One explicit RK step (FSAL): K[0] must hold f(y0) on entry.
 
-    On return y1 is the new state, err the embedded error estimate, K[s-1] holds
-    f(y1) (FSAL) and D the dense-output coefficients (DENSE_POLY).
+    On return y1 is the new state, err the embedded error estimate and K[s-1]
+    holds f(y1) (FSAL). :func:`erk_dense` turns K into dense output on demand.
     """
     s = b.size
     n = y0.size
@@ -124,9 +127,14 @@ def erk_step(A, b, b_err, P, y0, h, p, n_osc, dc, K, ytmp, y1, err, D) -> None:
         for j in range(s):
             e += b_err[j] * K[j, i]
         err[i] = h * e
-    nd = P.shape[1]
-    for r in range(nd):
-        for i in range(n):
+
+
+@njit(**_JIT)
+def erk_dense(P, K, h, D) -> None:
+    """Dense-output coefficients (DENSE_POLY) of the last :func:`erk_step`: D = h P^T K."""
+    s = P.shape[0]
+    for r in range(P.shape[1]):
+        for i in range(K.shape[1]):
             acc = 0.0
             for j in range(s):
                 acc += P[j, r] * K[j, i]
@@ -141,7 +149,6 @@ def rosenbrock_step(
     C,
     b,
     b_err,
-    H,
     y0,
     f0,
     h,
@@ -160,7 +167,6 @@ def rosenbrock_step(
     ftmp,
     y1,
     err,
-    D,
 ) -> bool:
     """One Rosenbrock-Wanner step for an autonomous system (transformed form).
 
@@ -168,8 +174,8 @@ def rosenbrock_step(
 
         W k_i = f(y0 + sum_{j<i} a_ij k_j) + sum_{j<i} (C_ij / h) k_j
 
-    and sets y1 = y0 + sum_i b_i k_i, err = sum_i b_err_i k_i, and the dense
-    coefficients D (DENSE_HERMITE) = H @ k. ``f0`` is f(y0); the Jacobian
+    and sets y1 = y0 + sum_i b_i k_i and err = sum_i b_err_i k_i; the stages
+    stay in K for :func:`rosenbrock_dense`. ``f0`` is f(y0); the Jacobian
     (jb, jcol, jrow, jcorner) must have been evaluated at y0. Returns False if W
     is singular or a stage is not finite.
     """
@@ -208,14 +214,19 @@ def rosenbrock_step(
             e += b_err[j] * K[j, i]
         y1[i] = y0[i] + acc
         err[i] = e
-    nd = H.shape[0]
-    for r in range(nd):
-        for i in range(n):
+    return True
+
+
+@njit(**_JIT)
+def rosenbrock_dense(H, K, D) -> None:
+    """Dense-output coefficients (DENSE_HERMITE) of the last step: D = H K."""
+    s = H.shape[1]
+    for r in range(H.shape[0]):
+        for i in range(K.shape[1]):
             acc = 0.0
             for j in range(s):
                 acc += H[r, j] * K[j, i]
             D[r, i] = acc
-    return True
 
 
 # ------------------------------------------------------------------ dense output
@@ -246,7 +257,9 @@ __all__ = [
     "DENSE_POLY",
     "DENSE_HERMITE",
     "erk_step",
+    "erk_dense",
     "rosenbrock_step",
+    "rosenbrock_dense",
     "dense_value",
     "dense_state",
     "error_norm",

@@ -19,10 +19,12 @@ from .integrators import (
     DENSE_POLY,
     accepted_step_factor,
     dense_state,
+    erk_dense,
     erk_step,
     error_norm,
     initial_step,
     rejected_step_factor,
+    rosenbrock_dense,
     rosenbrock_step,
 )
 from .model import eta_prime, jacobian_blocks, rhs
@@ -227,11 +229,11 @@ def integrate(
                 jcorner = jacobian_blocks(y, p, n_osc, dc, jb, jcol, jrow)
                 jac_fresh = True
             ok = rosenbrock_step(
-                _RB_GAMMA, _RB_A, _RB_C, _RB_B, _RB_E, _RB_H, y, f0, h, p, n_osc, dc,
-                jb, jcol, jrow, jcorner, lu, piv, z, K, ytmp, ftmp, ynew, err, D,
+                _RB_GAMMA, _RB_A, _RB_C, _RB_B, _RB_E, y, f0, h, p, n_osc, dc,
+                jb, jcol, jrow, jcorner, lu, piv, z, K, ytmp, ftmp, ynew, err,
             )  # fmt: skip
         else:
-            erk_step(_RK_A, _RK_B, _RK_E, _RK_P, y, h, p, n_osc, dc, K, ytmp, ynew, err, D)
+            erk_step(_RK_A, _RK_B, _RK_E, y, h, p, n_osc, dc, K, ytmp, ynew, err)
             ok = True
         if ok:
             for i in range(n):
@@ -256,8 +258,15 @@ def integrate(
                 break
             continue
 
-        # accepted
+        # accepted; dense output only where a crossing or a sample needs it
         n_steps += 1
+        if (y[1] < 0.0 <= ynew[1]) or (
+            n_samp < samples.shape[0] and t_transient + n_samp * sample_dt <= t + h
+        ):
+            if rosen:
+                rosenbrock_dense(_RB_H, K, D)
+            else:
+                erk_dense(_RK_P, K, h, D)
         n_cross, n_samp = _observe(
             kind, t, h, y, ynew, D, t_transient, pts, tpts, n_cross, samples, sample_dt,
             n_samp, ymin, ymax,
