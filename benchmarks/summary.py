@@ -184,7 +184,7 @@ def write_summary(r):
             f"{ps['efficiency']:.1%}; CPU utilisation {ps['cpu_utilisation_1']:.0%} (1 thread), "
             f"{ps['cpu_utilisation_p']:.0%} ({ps['threads']} threads); the static contiguous "
             f"split of the values allows at most {ps['static_split_balance_bound']:.1%} "
-            "(step counts per half); one-at-a-time hand-out in chunks of "
+            "(step counts per half); interleaving the values over the threads in chunks of "
             f"{ps.get('chunk_assumed', '?')} values with a barrier after each (what ssf.sweep "
             f"does by default) allows at most {_f(ps.get('chunked_dynamic_bound'), '{:.1%}')}. "
             "CPU time T1/Tp "

@@ -78,17 +78,15 @@ def static_balance_bound(n_steps, p):
     return float(n_steps.sum() / (p * max(x.sum() for x in parts)))
 
 
-def chunked_dynamic_bound(n_steps, p, chunk):
-    """Best efficiency when values run in consecutive chunks of ``chunk`` (a barrier after
-    each) and are handed out one at a time to the first free of p threads (greedy list
-    scheduling, work = step count)."""
+def chunked_interleaved_bound(n_steps, p, chunk):
+    """Best efficiency of what ssf.sweep does: consecutive chunks of ``chunk`` values (a
+    barrier after each), inside which thread k runs values k, k + p, k + 2p, ...
+    (work = step count)."""
     w = np.asarray(n_steps, dtype=float)
     makespan = 0.0
     for a in range(0, w.size, chunk):
-        free = np.zeros(p)
-        for x in w[a : a + chunk]:
-            free[free.argmin()] += x
-        makespan += free.max()
+        part = w[a : a + chunk]
+        makespan += max(part[k::p].sum() for k in range(min(p, part.size)))
     return float(w.sum() / (p * makespan))
 
 
@@ -159,7 +157,7 @@ def parallel_scaling(mode, log):
         cpu_utilisation_1=r1["cpu_utilisation"],
         cpu_utilisation_p=rp["cpu_utilisation"],
         static_split_balance_bound=bound,
-        chunked_dynamic_bound=chunked_dynamic_bound(steps, p, 32 * p),
+        chunked_dynamic_bound=chunked_interleaved_bound(steps, p, 32 * p),
         chunk_assumed=32 * p,
         n_steps_per_value=np.asarray(steps).tolist(),
         cpu_work_ratio=r1["cpu"] / rp["cpu"],
