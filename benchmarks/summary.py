@@ -180,7 +180,10 @@ def write_summary(r):
         L += [
             "## Parallel scaling",
             "",
-            f"T1 = {ps['t1']:.2f} s, T{ps['threads']} = {ps['tp']:.2f} s, efficiency "
+            f"Best of alternating runs: T1 = {ps['t1']:.2f} s (all: "
+            f"{', '.join(f'{w:.2f}' for w in ps.get('all_walls_1', []))}), T{ps['threads']} = "
+            f"{ps['tp']:.2f} s (all: {', '.join(f'{w:.2f}' for w in ps.get('all_walls_p', []))}), "
+            "efficiency "
             f"{ps['efficiency']:.1%}; CPU utilisation {ps['cpu_utilisation_1']:.0%} (1 thread), "
             f"{ps['cpu_utilisation_p']:.0%} ({ps['threads']} threads); the static contiguous "
             f"split of the values allows at most {ps['static_split_balance_bound']:.1%} "

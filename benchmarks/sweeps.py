@@ -137,9 +137,18 @@ def parallel_scaling(mode, log):
     p = numba.config.NUMBA_NUM_THREADS
     iters = 5_000_000 if mode == "full" else 1_000_000
     before = _control(p, iters)
-    log(f"parallel scaling: fig6 sweep, {n} values, 1 vs {p} threads ...")
-    r1, steps = _sweep_record("fig6", cfg, n, 1)
-    rp, _ = _sweep_record("fig6", cfg, n, p)
+    reps = 3 if mode == "full" else 1
+    log(
+        f"parallel scaling: fig6 sweep, {n} values, 1 vs {p} threads, best of {reps} alternating ..."
+    )
+    # the VM's per-core speed drifts: alternate 1 and p threads and keep the best of each
+    ones, ps = [], []
+    for _ in range(reps):
+        r1, steps = _sweep_record("fig6", cfg, n, 1)
+        ones.append(r1)
+        ps.append(_sweep_record("fig6", cfg, n, p)[0])
+    r1 = min(ones, key=lambda r: r["wall"])
+    rp = min(ps, key=lambda r: r["wall"])
     after = _control(p, iters)
     eff = r1["wall"] / (p * rp["wall"])
     bound = static_balance_bound(steps, p)
@@ -165,6 +174,8 @@ def parallel_scaling(mode, log):
         control_after=after,
         loadavg=list(os.getloadavg()),
         runs=[r1, rp],
+        all_walls_1=[r["wall"] for r in ones],
+        all_walls_p=[r["wall"] for r in ps],
     )
 
 
