@@ -253,9 +253,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one plain line for command-line users (no source excerpt)."""
+    print(f"stickslip-fast: warning: {message}", file=file or sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    import warnings
+
+    warnings.showwarning = _show_warning
     try:
         return int(args.func(args) or 0)
     except (ConfigError, ValueError, ImportError) as exc:  # ImportError: a missing extra
