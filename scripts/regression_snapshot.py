@@ -1,0 +1,120 @@
+"""Snapshot the engine's results on every config in data/, to prove a refactor changes nothing.
+
+For each sweep config: a 50-value grid over its own range (each axis of a 2-D
+sweep gets 7 values), with the config's integration settings and mode. For each
+single-run config: the run itself (points, samples, final state). Also a
+Lyapunov exponent on two presets. Everything goes into one ``.npz`` file;
+``--compare OLD.npz`` then reports, array by array, whether the new results
+are bit-identical and the largest difference where they are not.
+
+Usage::
+
+    python3 scripts/regression_snapshot.py -o before.npz
+    # ... change the code, clear the Numba cache ...
+    python3 scripts/regression_snapshot.py -o after.npz --compare before.npz
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import stickslip_fast as ssf
+from stickslip_fast.config import load_config
+
+ROOT = Path(__file__).resolve().parents[1]
+GRID = 50
+GRID_2D = 7
+
+
+def _grid(values: np.ndarray, num: int) -> np.ndarray:
+    return np.linspace(float(values[0]), float(values[-1]), num)
+
+
+def snapshot(only: str | None = None) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    for path in sorted((ROOT / "data").glob("*.toml")):
+        if only and only not in path.name:
+            continue
+        cfg = load_config(path)
+        integ = dict(cfg.integration)
+        key = path.stem
+        if cfg.sweep is not None:
+            param = cfg.sweep["param"]
+            if isinstance(param, tuple):
+                values = tuple(_grid(v, GRID_2D) for v in cfg.sweep["values"])
+            else:
+                values = _grid(cfg.sweep["values"], GRID)
+            res = ssf.sweep(
+                cfg.system, param, values, y0=cfg.y0, mode=cfg.sweep.get("mode", "restart"),
+                progress=False, **integ,
+            )  # fmt: skip
+            out[f"{key}/points"] = res.points
+            out[f"{key}/period"] = res.period
+            out[f"{key}/status"] = np.asarray(res.status).astype("U16")
+            out[f"{key}/n_steps"] = res.n_steps
+            out[f"{key}/final_state"] = res.final_state
+        else:
+            res = ssf.simulate(cfg.system, y0=cfg.y0, sample_dt=cfg.sample_dt, **integ)
+            out[f"{key}/points"] = res.poincare
+            out[f"{key}/t_points"] = res.t_poincare
+            out[f"{key}/period"] = np.array(res.period)
+            out[f"{key}/status"] = np.array(res.status)
+            out[f"{key}/n_steps"] = np.array([res.n_steps, res.n_rejected])
+            out[f"{key}/final_state"] = res.final_state
+            if res.y is not None:
+                out[f"{key}/samples"] = res.y
+        print(f"{key}: done", file=sys.stderr, flush=True)
+    if not only or "lyapunov" in only:
+        for preset, eta in (("asymmetric", 2.0), ("literature", 2.7)):
+            lr = ssf.largest_lyapunov(ssf.System.preset(preset, eta=eta), 1500, 500)
+            key = f"lyapunov_{preset}_{eta}"
+            out[f"{key}/exponent"] = np.array([lr.exponent, lr.exponent_fit])
+            out[f"{key}/convergence"] = lr.convergence
+            out[f"{key}/n_steps"] = np.array([lr.n_steps, lr.n_rejected])
+            out[f"{key}/final_state"] = lr.final_state
+        print("lyapunov: done", file=sys.stderr, flush=True)
+    return out
+
+
+def compare(new: dict[str, np.ndarray], old_path: Path) -> int:
+    old = dict(np.load(old_path))
+    bad = 0
+    for key in sorted(set(old) | set(new)):
+        if key not in new or key not in old:
+            print(f"MISSING  {key}")
+            bad += 1
+            continue
+        a, b = old[key], new[key]
+        if a.shape != b.shape:
+            print(f"SHAPE    {key}: {a.shape} vs {b.shape}")
+            bad += 1
+        elif a.dtype.kind in "fc":
+            same = np.array_equal(a, b, equal_nan=True)
+            if not same:
+                d = np.nanmax(np.abs(a - b)) if a.size else 0.0
+                print(f"DIFFER   {key}: max |diff| = {d:.3g}")
+                bad += 1
+        elif not np.array_equal(a, b):
+            print(f"DIFFER   {key}: {np.count_nonzero(a != b)} entries")
+            bad += 1
+    print(f"{len(set(old) | set(new))} arrays, {bad} not bit-identical")
+    return 1 if bad else 0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("-o", "--out", required=True, type=Path)
+    ap.add_argument("--compare", type=Path, help="an earlier snapshot to compare with")
+    ap.add_argument("--only", help="only configs whose file name contains this")
+    args = ap.parse_args()
+    snap = snapshot(args.only)
+    np.savez_compressed(args.out, **snap)
+    return compare(snap, args.compare) if args.compare else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
