@@ -33,6 +33,7 @@ Layout (every section optional except what the command needs)::
     values = { start = 1.0, stop = 10.0, num = 1000 }   # or a list; 2-D: a list of two
     mode = "restart"                               # restart | continuation | continuation-both
     chunk_size = 64
+    analyses = ["sync"]                            # extra per-value results (io.ANALYSES)
 
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
 """
@@ -65,7 +66,7 @@ _SECTIONS = {
         "equilibrium_tol", "period_tol",
     },
     "simulate": {"sample_dt"},
-    "sweep": {"param", "values", "mode", "chunk_size"},
+    "sweep": {"param", "values", "mode", "chunk_size", "analyses"},
 }  # fmt: skip
 
 
@@ -118,11 +119,22 @@ def _values_from_spec(spec: Any, key: str) -> np.ndarray:
             raise ConfigError(f"{key}.num must be an integer >= 1, got {num!r}")
         return np.linspace(float(spec["start"]), float(spec["stop"]), num)
     if isinstance(spec, list) and spec:
-        try:
-            return np.asarray(spec, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"{key} must hold numbers: {exc}") from None
+        for i, v in enumerate(spec):  # no "3.0" -> 3.0 or true -> 1.0 conversions
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ConfigError(f"{key} must hold numbers, but {key}[{i}] is {v!r}")
+        return np.asarray(spec, dtype=float)
     raise ConfigError(f"{key} must be a non-empty list or {{start, stop, num}}, got {spec!r}")
+
+
+def _analyses(value: Any) -> tuple[str, ...]:
+    from .io import ANALYSES
+
+    if not isinstance(value, list) or not all(isinstance(a, str) for a in value):
+        raise ConfigError(f"[sweep].analyses must be a list of names, got {value!r}")
+    unknown = [a for a in value if a not in ANALYSES]
+    if unknown:
+        raise ConfigError(f"[sweep].analyses: unknown {unknown}; choose from {sorted(ANALYSES)}")
+    return tuple(value)
 
 
 def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
@@ -223,6 +235,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
             if isinstance(cs, bool) or not isinstance(cs, int) or cs < 1:
                 raise ConfigError(f"[sweep].chunk_size must be an integer >= 1, got {cs!r}")
             sweep["chunk_size"] = cs
+        if "analyses" in sw:
+            sweep["analyses"] = _analyses(sw["analyses"])
 
     title = data.get("title", "")
     notes = data.get("notes", "")
