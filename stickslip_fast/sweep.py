@@ -94,9 +94,9 @@ def _check_axis(system: System, name: str, vals: Any) -> np.ndarray:
         raise ValueError(f"values for {name!r} must be a non-empty 1-D array")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"values for {name!r} must be finite")
-    for v in (arr.min(), arr.max()):
+    for v in (float(arr.min()), float(arr.max())):
         try:
-            system.replace(**{name: float(v)})
+            system.replace(**{name: v})
         except ValueError as exc:
             raise ValueError(f"value {v!r} of swept param {name!r} is invalid: {exc}") from None
     return arr
