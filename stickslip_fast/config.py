@@ -40,6 +40,7 @@ Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from .settings import Settings
 from .system import System
 
 if sys.version_info >= (3, 11):
@@ -56,15 +58,20 @@ else:  # pragma: no cover
 
 __all__ = ["ConfigError", "RunConfig", "load_config", "parse_config", "paper_order_to_state"]
 
+#: [integration] keys: the fields of Settings, with their declared types.
+_SETTING_TYPES = {f.name: str(f.type) for f in dataclasses.fields(Settings)}
+_TOML_TYPES = {
+    "float": ("a number", (int, float)),
+    "int": ("an integer", int),
+    "str": ("a string", str),
+}
+
 _SECTIONS = {
     "title": None,
     "notes": None,
     "system": None,  # keys checked by System
     "initial": {"y0", "y0_paper", "vb"},
-    "integration": {
-        "t_end", "t_transient", "method", "rtol", "atol", "h", "max_points", "max_steps",
-        "equilibrium_tol", "period_tol",
-    },
+    "integration": set(_SETTING_TYPES),  # every field of Settings
     "simulate": {"sample_dt"},
     "sweep": {"param", "values", "mode", "chunk_size", "analyses"},
 }  # fmt: skip
@@ -184,15 +191,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
 
     integration = dict(data.get("integration", {}))
     for key, value in integration.items():
-        want_int = key in ("max_points", "max_steps")
-        if key == "method":
-            ok = isinstance(value, str)
-        else:
-            ok = not isinstance(value, bool) and isinstance(
-                value, int if want_int else (int, float)
-            )
-        if not ok:
-            kind = "a string" if key == "method" else "an integer" if want_int else "a number"
+        kind, types = _TOML_TYPES[_SETTING_TYPES[key]]
+        if isinstance(value, bool) or not isinstance(value, types):
             raise ConfigError(f"[integration].{key} must be {kind}, got {value!r}")
 
     sample_dt = data.get("simulate", {}).get("sample_dt")

@@ -86,6 +86,8 @@ def _check_axis(system: System, name: str, vals: Any) -> np.ndarray:
             f"param {name!r} cannot be swept; choose one of {list(SWEEPABLE)} "
             "(n_oscillators and drive change the state layout)"
         )
+    if isinstance(vals, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in vals):
+        raise ValueError(f"values for {name!r} must be numbers, got a boolean in {vals!r}")
     arr = np.asarray(vals)
     if arr.dtype.kind not in "iuf":  # strings, booleans, objects: not silently converted
         raise ValueError(f"values for {name!r} must be numbers, got an array of {arr.dtype}")
@@ -192,7 +194,7 @@ def _plan(system, param, values, mode, y0, analyses, settings: Settings) -> _Pla
             "max_points = 0: no Poincare points are kept, so no period is detected "
             "(period 0 for every value); only status and final state are recorded",
             UserWarning,
-            stacklevel=3,
+            stacklevel=4,
         )
     return _Plan(
         system, names, axes, mode, settings, system.initial_state(y0), _normalise_analyses(analyses)
@@ -220,9 +222,10 @@ def _check_sweep_memory(plan: _Plan, in_memory: bool, chunk_size: int, threads: 
     if in_memory:
         n_values = int(np.prod(plan.layout.grid_shape))
         what = "the in-memory results (give out= to stream them to a file)"
-    else:
-        n_values = chunk_size
-        what = f"one chunk of {chunk_size} values (lower chunk_size)"
+    else:  # a continuation unit holds a segment of chunk_size values of every chain
+        n_chains = int(np.prod(plan.layout.grid_shape)) // len(plan.axes[0])
+        n_values = chunk_size * (1 if plan.mode == "restart" else n_chains)
+        what = f"one unit of {n_values} values (lower chunk_size)"
     check_memory(
         n_values * per_value + threads * 8 * n_state * WORKSPACE_VECTORS,
         f"{what} with n_oscillators = {plan.system.n_oscillators} and max_points = {kp}",

@@ -81,9 +81,10 @@ def test_toml_2d_value_list_names_the_axis():
         parse_config(data)
 
 
-def test_arrays_of_strings_are_not_converted():
+@pytest.mark.parametrize("values", [["2.0", "3.0"], [True, 2.0], np.array([True, False])])
+def test_strings_and_booleans_are_not_converted_to_values(values):
     with pytest.raises(ValueError, match="values for 'eta' must be numbers"):
-        ssf.sweep(System(), "eta", ["2.0", "3.0"], **QUICK)
+        ssf.sweep(System(), "eta", values, **QUICK)
 
 
 def test_max_points_zero_warns_in_a_sweep():
@@ -127,7 +128,7 @@ def test_huge_chain_is_refused_with_a_memory_estimate(small_memory, tmp_path):
     with pytest.raises(ValueError, match=r"in-memory results \(give out=.*n_oscillators = 1000000"):
         ssf.sweep(big, "eta", np.linspace(1, 10, 10), t_end=20.0, max_points=256)
     out = tmp_path / "never-written.h5"
-    with pytest.raises(ValueError, match=r"one chunk of 64 values.*GiB"):
+    with pytest.raises(ValueError, match=r"one unit of 64 values.*GiB"):
         ssf.sweep(big, "eta", [2.0], t_end=20.0, max_points=256, out=out, chunk_size=64)
     assert not out.exists()  # refused before the file is created
 
