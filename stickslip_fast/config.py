@@ -116,6 +116,10 @@ def _values_from_spec(spec: Any, key: str) -> np.ndarray:
         num = spec["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise ConfigError(f"{key}.num must be an integer >= 1, got {num!r}")
+        for end in ("start", "stop"):
+            v = spec[end]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ConfigError(f"{key}.{end} must be a number, got {v!r}")
         return np.linspace(float(spec["start"]), float(spec["stop"]), num)
     if isinstance(spec, list) and spec:
         try:
@@ -133,16 +137,21 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         allowed = _SECTIONS[section]
         if allowed is not None:
             if not isinstance(value, dict):
-                raise ConfigError(f"[{section}] must be a table")
+                raise ConfigError(
+                    f"{section!r} must be a table ([{section}] with its keys), got {value!r}"
+                )
             unknown = sorted(set(value) - allowed)
             if unknown:
                 raise ConfigError(
                     f"unknown key(s) {unknown} in [{section}]; allowed: {sorted(allowed)}"
                 )
 
-    sys_table = dict(data.get("system", {}))
     if not isinstance(data.get("system", {}), dict):
-        raise ConfigError("[system] must be a table")
+        raise ConfigError(
+            f"'system' must be a table ([system] with preset = ... and fields), "
+            f"got {data['system']!r}"
+        )
+    sys_table = dict(data.get("system", {}))
     preset = sys_table.pop("preset", None)
     try:
         system = System.preset(preset, **sys_table) if preset else System.from_dict(sys_table)
@@ -249,6 +258,16 @@ def load_config(path: str | Path) -> RunConfig:
             data = tomllib.load(fh)
     except FileNotFoundError:
         raise ConfigError(f"config file not found: {path}") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path} is a directory, not a TOML config file") from None
+    except PermissionError:
+        raise ConfigError(f"{path}: permission denied reading the config file") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the config file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"{path}: not a TOML text file (invalid UTF-8 at byte {exc.start}; is it binary?)"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: invalid TOML: {exc}") from None
     try:

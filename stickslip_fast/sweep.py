@@ -153,12 +153,17 @@ class SweepResult:
         if name not in self._data:
             if self.path is None:
                 raise AttributeError(name)
-            import h5py
+            from .io import ResultFileError, open_h5
 
-            with h5py.File(self.path, "r", libver="latest", swmr=True) as h5:
+            with open_h5(self.path) as h5:
                 if name not in h5:
                     raise AttributeError(f"{self.path} has no {name!r} dataset")
-                self._data[name] = h5[name][...]
+                try:
+                    self._data[name] = h5[name][...]
+                except (OSError, RuntimeError) as exc:
+                    raise ResultFileError(
+                        f"{self.path}: {name!r} cannot be read ({exc}); the file is corrupted"
+                    ) from None
         return self._data[name]
 
     points = property(lambda self: self._get("points"))
