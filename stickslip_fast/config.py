@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from .system import System
+from .system import SWEEPABLE, System
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -177,7 +177,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
     except ConfigError:
         raise
     except (ValueError, TypeError) as exc:
-        raise ConfigError(f"[initial]: {exc}") from None
+        key = "y0" if "y0" in initial else "y0_paper"
+        raise ConfigError(f"[initial].{key}: {exc}") from None
 
     integration = dict(data.get("integration", {}))
     for key, value in integration.items():
@@ -222,10 +223,16 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
             values = _values_from_spec(sw["values"], "[sweep].values")
         else:
             raise ConfigError(f"[sweep].param must be a string, got {param!r}")
+        for name in (param,) if isinstance(param, str) else param:
+            if name not in SWEEPABLE:
+                raise ConfigError(
+                    f"[sweep].param {name!r} cannot be swept; choose from {list(SWEEPABLE)}"
+                )
         sweep = {"param": param, "values": values}
         if "mode" in sw:
-            if not isinstance(sw["mode"], str):
-                raise ConfigError(f"[sweep].mode must be a string, got {sw['mode']!r}")
+            modes = ("restart", "continuation", "continuation-both")
+            if sw["mode"] not in modes:
+                raise ConfigError(f"[sweep].mode must be one of {modes}, got {sw['mode']!r}")
             sweep["mode"] = sw["mode"]
         if "chunk_size" in sw:
             cs = sw["chunk_size"]

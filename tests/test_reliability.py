@@ -335,6 +335,15 @@ def test_memory_errors_are_one_line_with_the_size(tmp_path, capsys):
             r"c\.toml: \[sweep\]\.values\.start must be a number, got 'a'",
         ),
         (b"integration = 3\n", r"c\.toml: 'integration' must be a table"),
+        (
+            b'[sweep]\nparam = "bogus"\nvalues = [1.0]\n',
+            r"\[sweep\]\.param 'bogus' cannot be swept",
+        ),
+        (
+            b'[sweep]\nparam = "eta"\nvalues = [2.0]\nmode = "sideways"\n',
+            r"\[sweep\]\.mode must be",
+        ),
+        (b'[initial]\ny0 = "x"\n', r"\[initial\]\.y0: y0 must be an array of 4 numbers"),
     ],
 )
 def test_config_errors_name_the_file_and_key(tmp_path, content, match):
