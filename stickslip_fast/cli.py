@@ -228,10 +228,11 @@ def _has_fletcher(path) -> bool:
 
 
 def _sweep_report(path, h5) -> tuple[str, np.ndarray]:
+    from .io import stored_config
     from .poincare import STATUS_NAMES
 
     lines = []
-    cfg = json.loads(h5.attrs["config"])
+    cfg = stored_config(h5)
     names = cfg["param"]
     done = h5["done"][...].astype(bool)
     status = h5["status"][...]

@@ -241,7 +241,8 @@ def open_h5(path: str | Path, *, check_truncation: bool = True) -> h5py.File:
         raise FileNotFoundError(f"no such file: {path}")
     if path.is_dir():
         raise ResultFileError(f"{path} is a directory, not a result file")
-    if check_truncation:
+    live = writer_alive(path)
+    if check_truncation and not live:  # a live writer may have allocated past the end
         problem = _truncation(path)
         if problem:
             raise ResultFileError(f"{path}: {problem}")
@@ -255,7 +256,8 @@ def open_h5(path: str | Path, *, check_truncation: bool = True) -> h5py.File:
             os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ, fapl=fapl
         )
     except (OSError, RuntimeError) as exc:
-        raise ResultFileError(f"{path}: not a readable HDF5 file ({_short(exc)})") from None
+        hint = "; a sweep is writing it now, try again" if live else ""
+        raise ResultFileError(f"{path}: not a readable HDF5 file ({_short(exc)}){hint}") from None
     return h5py.File(fid)
 
 
@@ -425,7 +427,7 @@ class SweepFile:
                 )
             if schema != SCHEMA_VERSION:
                 raise ConfigMismatchError(f"{path} has an unsupported schema version {schema!r}")
-            problems, bad = scan_sweep(src, layout)
+            problems, bad = scan_sweep(src, layout, meta[2])
         truncated = _truncation(path)
         if truncated:
             problems.insert(0, truncated)
@@ -671,7 +673,9 @@ def _data_fields(layout: SweepLayout) -> tuple[str, ...]:
     )
 
 
-def scan_sweep(h5: h5py.File, layout: SweepLayout | None = None) -> tuple[list[str], np.ndarray]:
+def scan_sweep(
+    h5: h5py.File, layout: SweepLayout | None = None, config: dict | None = None
+) -> tuple[list[str], np.ndarray]:
     """Verify a sweep file by reading every chunk of every per-value dataset.
 
     Reading checks each chunk's Fletcher-32 checksum and its compression; the
@@ -683,6 +687,9 @@ def scan_sweep(h5: h5py.File, layout: SweepLayout | None = None) -> tuple[list[s
         An open sweep file.
     layout : SweepLayout, optional
         The expected layout (default: taken from the file).
+    config : dict, optional
+        The expected configuration (default: the file's own, after checking it
+        against the stored ``config_sha256``).
 
     Returns
     -------
@@ -691,7 +698,15 @@ def scan_sweep(h5: h5py.File, layout: SweepLayout | None = None) -> tuple[list[s
     bad : ndarray of bool, grid shape
         Values with at least one unreadable piece.
     """
-    cfg = json.loads(h5.attrs["config"])
+    problems: list[str] = []
+    if config is None:
+        cfg = stored_config(h5)
+    else:
+        cfg = json.loads(config_digest(config)[0])
+        try:
+            stored_config(h5)
+        except ResultFileError as exc:
+            problems.append(str(exc).split(": ", 1)[-1])
     params = list(cfg["param"])
     if layout is None:
         fields = ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS)
@@ -701,7 +716,6 @@ def scan_sweep(h5: h5py.File, layout: SweepLayout | None = None) -> tuple[list[s
     else:
         fields = _data_fields(layout)
         grid = layout.grid_shape
-    problems: list[str] = []
     for name, want in zip(params, cfg.get("values_sha256", ())):
         try:
             got = hashlib.sha256(np.ascontiguousarray(h5[name][...], dtype="<f8").tobytes())
@@ -742,6 +756,33 @@ def scan_sweep(h5: h5py.File, layout: SweepLayout | None = None) -> tuple[list[s
             + ", ".join(unreadable)
         )
     return problems, bad
+
+
+def stored_config(h5: h5py.File) -> dict:
+    """The configuration stored in a result file, checked against its SHA-256.
+
+    Raises
+    ------
+    ResultFileError
+        If the attribute is missing, is not JSON, or does not match
+        ``config_sha256``.
+    """
+    name = h5.filename
+    try:
+        text = h5.attrs["config"]
+        want = h5.attrs.get("config_sha256")
+    except (OSError, RuntimeError, KeyError) as exc:
+        raise ResultFileError(f"{name}: the configuration cannot be read ({_short(exc)})") from None
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "replace")
+    if want is not None and hashlib.sha256(str(text).encode()).hexdigest() != want:
+        raise ResultFileError(
+            f"{name}: the stored configuration does not match its SHA-256 (corrupted attribute)"
+        )
+    try:
+        return json.loads(text)
+    except (TypeError, ValueError):
+        raise ResultFileError(f"{name}: the stored configuration is not valid JSON") from None
 
 
 def _new_file(path: Path, layout: SweepLayout, meta: tuple) -> h5py.File:
@@ -917,7 +958,7 @@ def read_sweep(path: str | Path) -> dict[str, Any]:
                 raise ResultFileError(
                     f"{path} is a trajectory file (simulate -o); read it with read_trajectory"
                 )
-            out["config"] = json.loads(h5.attrs["config"])
+            out["config"] = stored_config(h5)
             out["attrs"] = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
             params = tuple(str(h5.attrs["param"]).split(","))
             out["param"] = params

@@ -167,6 +167,19 @@ def test_corrupted_coordinate_fails_its_sha256(ref_file, tmp_path):
     _same(ref_file[1], res)
 
 
+def test_edited_configuration_fails_its_sha256(ref_file, tmp_path):
+    path = _copy(ref_file, tmp_path)
+    with h5py.File(path, "r+") as h5:  # an edit behind the package's back
+        h5.attrs["config"] = h5.attrs["config"].replace('"mode":"restart"', '"mode":"continuation"')
+    with pytest.raises(ResultFileError, match="configuration does not match its SHA-256"):
+        load_sweep(path)
+    assert _cli("info", path).returncode == 2
+    res, warned = _run(path)  # resume restores the caller's configuration
+    assert any("does not match its SHA-256" in w for w in warned), warned
+    _same(ref_file[1], res)
+    assert load_sweep(path).mode == "restart"
+
+
 def _mark_killed(path, undone=slice(100, 130)):
     """Leave ``path`` as a SIGKILLed SWMR writer does: flagged open, some values not done."""
     script = textwrap.dedent(
