@@ -270,6 +270,36 @@ def test_full_disk_stops_cleanly_and_the_file_resumes(ref_file, tmp_path):
     _same(ref_file[1], load_sweep(out))
 
 
+def test_nearly_full_disk_is_probed_before_writing(ref_file, tmp_path, monkeypatch):
+    """Near a full disk the room is taken for real (posix_fallocate); a refusal
+    stops the sweep before HDF5 writes anything."""
+    import errno
+    import types
+
+    path = _copy(ref_file, tmp_path)
+    with h5py.File(path, "r+") as h5:
+        h5["done"][100:] = 0
+    before = path.read_bytes()
+    calls = []
+
+    def refuse(fd, offset, length):
+        calls.append(length)
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(
+        os, "fstatvfs", lambda fd: types.SimpleNamespace(f_bavail=1, f_frsize=2**20)
+    )
+    monkeypatch.setattr(os, "posix_fallocate", refuse)
+    from stickslip_fast.io import DiskFullError
+
+    with pytest.raises(DiskFullError, match=r"no room to grow it by \d+ KiB \(No space left"):
+        _run(path)
+    assert calls and path.read_bytes() == before  # nothing written, file intact
+    _no_leftovers(path)
+    monkeypatch.undo()
+    _same(ref_file[1], _run(path)[0])
+
+
 # ------------------------------------------------------- item 11: the lock
 def test_writer_lock_covers_symlinks(ref_file, tmp_path):
     path = _copy(ref_file, tmp_path)
