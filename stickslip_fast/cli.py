@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from .config import ConfigError, RunConfig, load_config, parse_config
-from .system import PRESETS
+from .system import DRIVES, PRESETS
+from .trajectory import METHODS
 
 __all__ = ["main"]
 
@@ -67,12 +68,12 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("config", nargs="?", help="TOML configuration file (see docs/configs.md)")
     p.add_argument("--preset", choices=sorted(PRESETS), help="parameter set (default: asymmetric)")
     p.add_argument("--eta", type=float, help="static/kinetic friction ratio eta in [1, 10]")
-    p.add_argument("--drive", choices=["constant", "dc-motor"])
+    p.add_argument("--drive", choices=DRIVES)
     p.add_argument("--n-oscillators", dest="n_oscillators", type=int)
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a System field")
     p.add_argument("--t-end", dest="t_end", type=float)
     p.add_argument("--t-transient", dest="t_transient", type=float)
-    p.add_argument("--method", choices=["rodas5p", "dopri5", "dopri5-fixed"])
+    p.add_argument("--method", choices=METHODS)
     p.add_argument("--rtol", type=float)
     p.add_argument("--atol", type=float)
     p.add_argument("--h", type=float, help="fixed step (dopri5-fixed)")
@@ -115,7 +116,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.json:
         out = {
             "system": cfg.system.to_dict(),
-            "settings": res.settings,
+            "settings": res.settings.to_dict(),
             "status": res.status,
             "period": res.period,
             "n_steps": res.n_steps,
@@ -173,7 +174,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
         chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
         progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
-        n_workers=args.workers, title=cfg.title, notes=cfg.notes, **integ,
+        n_workers=args.workers, title=cfg.title, notes=cfg.notes,
+        analyses=sw.get("analyses", ()), **integ,
     )  # fmt: skip
     if not args.quiet:
         print(_report(res.path) if res.path is not None else repr(res))
@@ -183,73 +185,49 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 def _report(path, verify: bool = False) -> str:
     """A text summary of a result file: configuration, progress, periods, statuses.
 
-    With ``verify``, every chunk is read (checksums) and the swept values are
+    A trajectory file (``simulate -o``) gets its own summary. With ``verify``,
+    every chunk of a sweep file is read (checksums) and the swept values are
     checked against their SHA-256; a damaged file raises
     :class:`~stickslip_fast.io.ResultFileError` after the summary is printed.
     """
-    from .io import ResultFileError, _short, open_h5, scan_sweep, writer_alive
+    from .io import file_kind, open_h5, sweep_summary, verify_sweep, writer_alive
 
-    with open_h5(path) as h5:
-        try:
-            if h5.attrs.get("kind") == "trajectory":
-                return _trajectory_report(path, h5)
-            if "config" not in h5.attrs or "done" not in h5:
-                raise ResultFileError(
-                    f"{path}: an HDF5 file, but not a stickslip_fast result file "
-                    "(no 'config' attribute or 'done' dataset)"
-                )
-            text, done = _sweep_report(path, h5)
-            if not verify:
-                return text
-            if writer_alive(path):
-                return text + "\nintegrity: not checked (a sweep is writing this file now)"
-            problems, bad = scan_sweep(h5)
-        except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
-            if isinstance(exc, ResultFileError):
-                raise
-            raise ResultFileError(
-                f"{path}: cannot be summarised, the file is damaged ({_short(exc)})"
-            ) from None
+    if file_kind(path) == "trajectory":
+        with open_h5(path) as h5:
+            return _trajectory_report(path, h5)
+    text, has_fletcher = _sweep_report(path, sweep_summary(path))
+    if not verify:
+        return text
+    if writer_alive(path):
+        return text + "\nintegrity: not checked (a sweep is writing this file now)"
+    problems, bad = verify_sweep(path)
     if problems:
         print(text)
+        from .io import ResultFileError
+
         raise ResultFileError(
             f"{path} is corrupted: {'; '.join(problems)} ({int(bad.sum())} of {bad.size} "
             "values affected). Run the same sweep again to recompute them."
         )
-    checksums = "Fletcher-32 and SHA-256 verified" if _has_fletcher(path) else "SHA-256 verified"
+    checksums = "Fletcher-32 and SHA-256 verified" if has_fletcher else "SHA-256 verified"
     return text + f"\nintegrity: ok (every chunk read; {checksums})"
 
 
-def _has_fletcher(path) -> bool:
-    from .io import open_h5
-
-    with open_h5(path) as h5:
-        return bool(h5["done"].fletcher32)
-
-
-def _sweep_report(path, h5) -> tuple[str, np.ndarray]:
-    from .io import stored_config
+def _sweep_report(path, info: dict) -> tuple[str, bool]:
     from .poincare import STATUS_NAMES
 
-    lines = []
-    cfg = stored_config(h5)
-    names = cfg["param"]
-    done = h5["done"][...].astype(bool)
-    status = h5["status"][...]
-    period = h5["period"][...]
-    lines.append(f"file:      {path}")
-    if h5.attrs.get("title"):
-        lines.append(f"title:     {h5.attrs['title']}")
+    cfg, attrs = info["config"], info["attrs"]
+    done, status, period = info["done"], info["status"], info["period"]
+    lines = [f"file:      {path}"]
+    if attrs.get("title"):
+        lines.append(f"title:     {attrs['title']}")
     lines.append(
-        f"package:   stickslip_fast {h5.attrs.get('package_version', '?')}, "
-        f"schema {h5.attrs.get('schema_version')}, created {h5.attrs.get('created', '?')}"
+        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
+        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
     )
     sysd = {k: v for k, v in cfg["system"].items() if v is not None}
     lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
-    axes = []
-    for name in names:
-        a = h5[name][...]
-        axes.append(f"{name} in [{a.min():g}, {a.max():g}] ({a.size} values)")
+    axes = [f"{n} in [{a.min():g}, {a.max():g}] ({a.size} values)" for n, a in info["axes"].items()]
     lines.append("sweep:     " + " x ".join(axes) + f", mode {cfg['mode']}")
     st = cfg["settings"]
     lines.append(
@@ -273,7 +251,7 @@ def _sweep_report(path, h5) -> tuple[str, np.ndarray]:
             per, pc = np.unique(period[ok], return_counts=True)
             hist = ", ".join(f"{'none' if p == 0 else f'P{p}'}: {n}" for p, n in zip(per, pc))
             lines.append(f"periods:   {hist}")
-    return "\n".join(lines), done
+    return "\n".join(lines), bool(info.get("fletcher32"))
 
 
 def _trajectory_report(path, h5) -> str:
@@ -312,12 +290,15 @@ def _trajectory_report(path, h5) -> str:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from .io import open_h5
-
     print(_report(args.file, verify=True))
     if args.json:
-        with open_h5(args.file) as h5:
-            print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+        from .io import file_kind, open_h5, sweep_summary
+
+        if file_kind(args.file) == "trajectory":
+            with open_h5(args.file) as h5:
+                print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+        else:
+            print(json.dumps(sweep_summary(args.file)["config"], indent=1))
     return 0
 
 
