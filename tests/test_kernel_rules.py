@@ -31,7 +31,9 @@ def test_a_failing_value_never_corrupts_its_neighbours():
             if k == 1:
                 continue
             # every other value equals its own single run, bit for bit
-            ref = ssf.simulate(ssf.System.preset("asymmetric", eta=2.0, mu=mu), 300.0, 200.0, max_points=256)
+            ref = ssf.simulate(
+                ssf.System.preset("asymmetric", eta=2.0, mu=mu), 300.0, 200.0, max_points=256
+            )
             assert r.status[k] == ref.status == "ok" and r.n_steps[k] == ref.n_steps > 0
             assert r.period[k] == ref.period
         # the absurd value is computed and classified, whatever its outcome
