@@ -25,7 +25,7 @@ def test_quick_benchmark_suite(tmp_path):
         [sys.executable, str(ROOT / "benchmarks" / "run.py"), "--quick", "--out", str(out)],
         capture_output=True,
         text=True,
-        timeout=170,
+        timeout=900,
         cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
