@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 MODES = ("restart", "continuation", "continuation-both")
-BACKENDS = ("local", "dask")
+BACKENDS = ("local", "dask", "cuda")
 
 
 # ----------------------------------------------------------------- pure chunks
@@ -382,8 +382,13 @@ def sweep(
         Numba threads for this sweep (default: all). Results do not depend on it.
     progress : bool, optional
         tqdm progress bar; default: only when stderr is a terminal.
-    backend : {"local", "dask"}
-        Where units run. ``"dask"`` (extra ``stickslip_fast[dask]``) uses
+    backend : {"local", "dask", "cuda"}
+        Where units run. ``"cuda"`` (extra ``stickslip_fast[cuda]``) runs
+        restart sweeps one trajectory per GPU thread (N <= 4, Rodas5P; the rest
+        falls back to the CPU with a warning); it raises a RuntimeError without
+        a GPU. Its status and period equal the CPU's, its points agree to
+        ~1e-9 (not bit-identical), so it is part of the configuration: a file
+        is all-CPU or all-GPU. See docs/gpu.md. ``"dask"`` (extra ``stickslip_fast[dask]``) uses
         ``scheduler`` (an address such as ``"tcp://host:8786"``) or starts a
         LocalCluster of ``n_workers`` single-threaded processes (default: one
         per core) for this sweep. Results arrive in any order and only this
@@ -418,7 +423,7 @@ def sweep(
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if backend == "local" and (scheduler is not None or n_workers is not None):
+    if backend != "dask" and (scheduler is not None or n_workers is not None):
         raise ValueError("scheduler and n_workers are only used with backend='dask'")
     settings = resolve_settings(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
@@ -446,10 +451,15 @@ def sweep(
     }
     if analyses:  # absent when empty, so files made before analyses existed still resume
         config["analyses"] = list(analyses)
+    if backend == "cuda":  # GPU points differ from the CPU's at ~1e-9: never mixed in a file
+        config["backend"] = "cuda"
     grid = layout.grid_shape
     n_total = int(np.prod(grid))
     # resolved before any file is touched: a missing extra or a bad address fails first
-    runner = _run_local if backend == "local" else _dask_runner(scheduler, n_workers)
+    if backend == "cuda":
+        runner = _cuda_runner(system, settings, mode)
+    else:
+        runner = _run_local if backend == "local" else _dask_runner(scheduler, n_workers)
 
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))
@@ -669,6 +679,13 @@ def _dask_runner(scheduler: str | None, n_workers: int | None):
     from .backends import dask_runner
 
     return dask_runner(scheduler, n_workers)
+
+
+def _cuda_runner(system: System, settings: dict, mode: str):
+    """The CUDA runner (:func:`stickslip_fast.cuda_backend.cuda_runner`), imported on demand."""
+    from .cuda_backend import cuda_runner
+
+    return cuda_runner(system, settings, mode)
 
 
 def load_sweep(path: str | Path) -> SweepResult:
