@@ -150,6 +150,7 @@ def divergence(steps: np.ndarray, tpb: int) -> dict:
 def gpu_run(system, names, vals, settings, chunk, tpb, budget):
     """Restart chunks on the GPU, two launches in flight; returns timing and per-value fields."""
     y0 = system.initial_state(None)
+    chunk = chunk or cb.default_chunk_size(system, settings)
     run = cb.cuda_runner(system, settings, "restart", threads_per_block=tpb)
     from stickslip_fast.sweep import _Unit
 
@@ -313,7 +314,7 @@ def main(argv=None) -> int:
         default="32,64,128,256",
         help="block-size scan on 1e4 Fig. 6 values ('' to skip)",
     )
-    ap.add_argument("--chunk", type=int, default=cb.DEFAULT_CHUNK_SIZE, help="values per launch")
+    ap.add_argument("--chunk", type=int, help="values per launch (default: the backend's)")
     ap.add_argument(
         "--budget-s", type=float, default=240.0, help="GPU seconds per workload at most"
     )

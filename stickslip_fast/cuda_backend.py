@@ -56,7 +56,7 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
         'backend="cuda" needs numba-cuda: pip install "stickslip_fast[cuda]"'
     ) from exc
 
-from numba import cuda, float64, int64
+from numba import cuda, float64, int64, njit
 
 from . import model, poincare
 from .model import eta_prime
@@ -77,8 +77,11 @@ __all__ = [
 
 #: Largest chain the kernels are specialised for; larger N runs on the CPU.
 MAX_OSCILLATORS = 4
-#: Values per unit of work (one kernel launch) when ``sweep(chunk_size=None)``.
-DEFAULT_CHUNK_SIZE = 16384
+#: Values per unit of work (one kernel launch) when ``sweep(chunk_size=None)``,
+#: at most: enough threads to fill a large GPU twice over (see :func:`default_chunk_size`).
+DEFAULT_CHUNK_SIZE = 262144
+#: Device memory for one launch's outputs, at most (two launches are in flight).
+CHUNK_BYTES = 1 << 30
 #: Threads per block. Each thread needs ~1.5 kB of local memory (Rodas5P's 8
 #: stages, the Jacobian and its factors); 64 keeps occupancy limited by
 #: registers, not by blocks.
@@ -611,11 +614,16 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
 
 
 # ------------------------------------------------------------------ launches
+@njit(cache=True)
+def _fill_etap(rows: np.ndarray) -> None:
+    for k in range(rows.shape[0]):
+        rows[k, P_ETAP] = eta_prime(rows[k, P_ETA])
+
+
 def _rows_with_etap(rows: np.ndarray) -> np.ndarray:
     """Parameter rows with eta' computed on the host (the CPU kernel's own function)."""
     rows = np.ascontiguousarray(rows, dtype=np.float64).copy()
-    for k in range(rows.shape[0]):
-        rows[k, P_ETAP] = eta_prime(rows[k, P_ETA])
+    _fill_etap(rows)
     return rows
 
 
@@ -751,8 +759,64 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
             yield done, _pack(*launch.result())
 
     if why is None:  # otherwise the CPU's default applies
-        run.default_chunk_size = 64 if simulator_enabled() else DEFAULT_CHUNK_SIZE
+        run.default_chunk_size = default_chunk_size(system, settings)
     return run
+
+
+def default_chunk_size(system, settings: dict) -> int:
+    """Values per launch: enough to fill the GPU, within CHUNK_BYTES of outputs.
+
+    Twice (multiprocessors x 2048 threads), at most DEFAULT_CHUNK_SIZE and what
+    fits in CHUNK_BYTES; 64 in the simulator. Results do not depend on it.
+    """
+    if simulator_enabled():
+        return 64
+    dev = cuda.get_current_device()
+    fill = 2 * int(dev.MULTIPROCESSOR_COUNT) * 2048
+    per_value = 8 * ((settings["max_points"] + 1) * (system.n_state + 1) + 6)
+    return int(max(1024, min(DEFAULT_CHUNK_SIZE, fill, CHUNK_BYTES // per_value)))
+
+
+def kernel_signature():
+    """The argument types of the sweep kernels (as launched by the backend)."""
+    a1, a2, a3, i2 = float64[::1], float64[:, ::1], float64[:, :, ::1], int64[:, ::1]
+    f, i = float64, int64
+    return (a1, a2, f, f, f, f, f, i, f, f, i, a3, a2, i2, a2)
+
+
+def compile_ptx(n_osc: int, dc: bool, cc: tuple[int, int] = (9, 0)) -> str:
+    """PTX of a sweep kernel for compute capability ``cc``, compiled without a GPU.
+
+    Needs NVVM (``pip install "stickslip_fast[cuda]"`` brings it) but no driver:
+    it checks that the kernels, and the model functions they call, compile for
+    the real CUDA target, which the simulator cannot. numba-cuda asks the
+    current device for its compute capability when it compiles a called
+    function; that question is answered with ``cc`` for the duration.
+
+    Parameters
+    ----------
+    n_osc, dc : int, bool
+        As for :func:`get_kernel`.
+    cc : (int, int)
+        Target compute capability (default 9.0, Hopper).
+
+    Returns
+    -------
+    str
+        The PTX text (feed it to ``ptxas -v`` for registers per thread).
+    """
+    if simulator_enabled():
+        raise RuntimeError("compile_ptx needs the real CUDA target, not NUMBA_ENABLE_CUDASIM=1")
+    import types as _types
+    from unittest import mock
+
+    from numba.cuda import dispatcher
+
+    kernel = get_kernel(n_osc, dc)
+    fake = _types.SimpleNamespace(compute_capability=tuple(cc))
+    with mock.patch.object(dispatcher, "get_current_device", lambda: fake):
+        ptx, _ = cuda.compile_ptx(kernel.py_func, kernel_signature(), cc=tuple(cc))
+    return ptx
 
 
 def device_summary() -> dict:

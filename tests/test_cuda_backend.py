@@ -162,3 +162,39 @@ def test_without_a_gpu_the_error_says_so():
         pytest.skip("this machine has a GPU")
     assert "ERROR:" in res.stdout, res.stdout + res.stderr
     assert "needs an NVIDIA GPU" in res.stdout and "NUMBA_ENABLE_CUDASIM" in res.stdout
+
+
+def test_kernels_compile_for_the_real_cuda_target():
+    # The simulator runs the kernel as Python and cannot tell whether it compiles for
+    # a GPU. compile_ptx compiles the N = 2 DC-motor kernel (the bordered solve) and
+    # the model functions it calls to PTX, with NVVM but without a GPU. ~15 s.
+    try:
+        from cuda.pathfinder import load_nvidia_dynamic_lib
+
+        for lib in ("nvvm", "nvrtc"):
+            load_nvidia_dynamic_lib(lib)
+    except Exception as exc:  # noqa: BLE001 - any failure means: not available here
+        pytest.skip(f"no NVVM/NVRTC here (install the [cuda] extra): {type(exc).__name__}")
+    code = textwrap.dedent(
+        """
+        from stickslip_fast import cuda_backend as cb
+        try:
+            ptx = cb.compile_ptx(2, True, (8, 0))
+        except Exception as exc:  # no NVVM / NVRTC in this environment
+            text = f"{type(exc).__name__}: {exc}"
+            if any(s in text.lower() for s in ("nvvm", "nvrtc", "dynamiclibnotfound", "libdevice")):
+                print("NO-NVVM", text[:300]); raise SystemExit
+            raise
+        print("ENTRY" if ".entry" in ptx else "NO-ENTRY", ".target sm_80" in ptx)
+        """
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+    res = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600
+    )
+    if "NO-NVVM" in res.stdout:
+        pytest.skip("no NVVM here (install the [cuda] extra): " + res.stdout.strip())
+    assert res.returncode == 0, res.stdout + res.stderr[-3000:]
+    assert "ENTRY True" in res.stdout, res.stdout
