@@ -113,6 +113,26 @@ def test_2d_map_to_file_resumes_and_is_never_mixed_with_cpu(tmp_path):
             sweep(ASYM, ("eta", "k12"), axes, backend="local", out=out, **kw)
 
 
+def test_cli_backend_cuda(tmp_path, capsys):
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        '[system]\npreset = "asymmetric"\n[integration]\nt_end = 30.0\nt_transient = 10.0\n'
+        'max_points = 4\n[sweep]\nparam = "eta"\nvalues = [2.0, 5.0]\n'
+    )
+    out = tmp_path / "o.h5"
+    assert main(["sweep", str(cfg), "-o", str(out), "--quiet", "--backend", "cuda"]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        cpu = sweep(ASYM, "eta", [2.0, 5.0], t_end=30.0, t_transient=10.0, max_points=4,
+                    progress=False)  # fmt: skip
+    _agree(ssf.load_sweep(out), cpu)
+    # the same command with the CPU backend is a different configuration: refused
+    assert main(["sweep", str(cfg), "-o", str(out), "--quiet"]) == 2
+    assert "backend" in capsys.readouterr().err
+
+
 def test_falls_back_to_cpu_with_a_warning():
     kw = dict(t_end=10.0, t_transient=5.0, max_points=4, progress=False)
     eta = np.array([2.0])
