@@ -407,7 +407,9 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
         v = cuda.grid(1)
         if v >= params.shape[0]:
             return
-        p = params[v]  # eta' already filled in on the host
+        # eta' is filled in on the host. (Copying the row into a local array
+        # costs registers and spills, per ptxas: scripts/cuda_ptx_report.py.)
+        p = params[v]
         pts = points[v]
         tpts = t_points[v]
         cap = pts.shape[0]
@@ -746,17 +748,21 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
             yield from _run_local(units, system, names, y0, settings)
             return
         in_flight: deque = deque()
-        for unit in units:
-            rows = _param_rows(system, names, np.asarray(unit.values, dtype=float))
-            in_flight.append(
-                (unit, _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block))
-            )
-            if len(in_flight) > 1:
+        try:
+            for unit in units:
+                rows = _param_rows(system, names, np.asarray(unit.values, dtype=float))
+                in_flight.append(
+                    (unit, _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block))
+                )
+                if len(in_flight) > 1:
+                    done, launch = in_flight.popleft()
+                    yield done, _pack(*launch.result())
+            while in_flight:
                 done, launch = in_flight.popleft()
                 yield done, _pack(*launch.result())
-        while in_flight:
-            done, launch = in_flight.popleft()
-            yield done, _pack(*launch.result())
+        finally:  # closed early (an error, Ctrl-C): leave no kernel running behind us
+            for _, launch in in_flight:
+                launch.stream.synchronize()
 
     if why is None:  # otherwise the CPU's default applies
         run.default_chunk_size = default_chunk_size(system, settings)
