@@ -96,7 +96,7 @@ def settings_for(t_end, t_transient, max_points):
 def occupancy(regs: int, tpb: int, dev) -> dict:
     """Theoretical occupancy from registers per thread and block size (no shared memory)."""
     regs_sm = int(getattr(dev, "MAX_REGISTERS_PER_MULTIPROCESSOR", 65536))
-    threads_sm = int(getattr(dev, "MAX_THREADS_PER_MULTI_PROCESSOR", 2048))
+    threads_sm = int(getattr(dev, "MAX_THREADS_PER_MULTIPROCESSOR", 2048))
     blocks_sm = int(getattr(dev, "MAX_BLOCKS_PER_MULTIPROCESSOR", 32))
     warps_block = -(-tpb // 32)
     regs_warp = -(-regs * 32 // 256) * 256  # allocation granularity: 256 registers per warp

@@ -772,13 +772,14 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
 def default_chunk_size(system, settings: dict) -> int:
     """Values per launch: enough to fill the GPU, within CHUNK_BYTES of outputs.
 
-    Twice (multiprocessors x 2048 threads), at most DEFAULT_CHUNK_SIZE and what
+    Twice the threads the GPU holds (multiprocessors x threads per
+    multiprocessor, 2048 on recent GPUs), at most DEFAULT_CHUNK_SIZE and what
     fits in CHUNK_BYTES; 64 in the simulator. Results do not depend on it.
     """
     if simulator_enabled():
         return 64
     dev = cuda.get_current_device()
-    fill = 2 * int(dev.MULTIPROCESSOR_COUNT) * 2048
+    fill = 2 * int(dev.MULTIPROCESSOR_COUNT) * int(dev.MAX_THREADS_PER_MULTIPROCESSOR)
     per_value = 8 * ((settings["max_points"] + 1) * (system.n_state + 1) + 6)
     return int(max(1024, min(DEFAULT_CHUNK_SIZE, fill, CHUNK_BYTES // per_value)))
 
