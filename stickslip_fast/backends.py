@@ -28,7 +28,6 @@ naming the extra to install when ``distributed`` is missing.
 from __future__ import annotations
 
 import asyncio
-import functools
 import hashlib
 import itertools
 import json
@@ -39,6 +38,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .cache_guard import fingerprint
 
 try:  # the plugin base class; a stand-in keeps this module importable without Dask
     from distributed import WorkerPlugin as _WorkerPluginBase
@@ -73,27 +74,6 @@ _task_threads: int | None = None
 
 
 # ------------------------------------------------------------ worker side
-@functools.lru_cache(maxsize=1)
-def fingerprint() -> str:
-    """Identity of the code that computes results: package sources + Numba version.
-
-    Two processes with the same fingerprint compute the same bits from the same
-    inputs (on the same kind of CPU). Computed once per process.
-
-    Returns
-    -------
-    str
-        SHA-256 (hex) of every ``*.py`` file of the package (sorted by name)
-        and of the Numba version.
-    """
-    import numba
-
-    digest = hashlib.sha256(f"numba {numba.__version__}\n".encode())
-    for path in sorted(Path(__file__).parent.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
 def _set_task_threads() -> int:
     import numba
 

@@ -7,10 +7,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .interrupt import call_interruptible, new_abort_flag
 from .poincare import STATUS_NAMES, detect_period
 from .system import System
 from .trajectory import (
     F_AMPLITUDE,
+    F_T_CONVERGED,
     F_T_FINAL,
     I_CROSSINGS,
     I_REJECTED,
@@ -39,6 +41,11 @@ PERIOD_TOL_FACTOR = 1e4
 #: ten times the friction law's smoothing width eps = 1e-5 of the presets.
 DEFAULT_EQUILIBRIUM_TOL = 1e-4
 DEFAULT_MAX_STEPS = 20_000_000
+#: Stop rules: run to t_end ("fixed"), or end once converged ("converged").
+STOP_KINDS = ("fixed", "converged")
+#: Converged stopping: how long the disks must stay at rest before a run ends
+#: as an equilibrium (about 15 periods of the slowest free oscillation, 2 pi sqrt(m)).
+DEFAULT_DWELL = 200.0
 
 
 def period_tolerance(rtol: float) -> float:
@@ -79,6 +86,9 @@ class SimulationResult:
     amplitude : float
         Distance from rest over the recording window: the largest |dx_i| or
         |dphi_i|, or the range of v_b. At rest when below ``equilibrium_tol``.
+    t_converged : float
+        With ``stop="converged"``: when the run was found converged (NaN if it
+        reached t_end first, and always with ``stop="fixed"``).
     t, y : ndarray or None
         Uniform samples from t_transient every ``sample_dt`` (when requested).
     """
@@ -96,6 +106,7 @@ class SimulationResult:
     t_final: float
     final_state: np.ndarray
     amplitude: float
+    t_converged: float = float("nan")
     t: np.ndarray | None = None
     y: np.ndarray | None = None
     settings: dict = field(default_factory=dict)
@@ -131,8 +142,15 @@ def resolve_settings(
     max_steps: int | None,
     equilibrium_tol: float,
     period_tol: float | None,
+    stop: str = "fixed",
+    dwell: float | None = None,
 ) -> dict:
-    """Validate and complete integration settings (shared by simulate and sweep)."""
+    """Validate and complete integration settings (shared by simulate and sweep).
+
+    ``stop`` and ``dwell`` enter the dict only with ``stop="converged"``, so
+    the settings (and the configuration hashes of existing result files) of
+    fixed-window runs are what they always were.
+    """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     t_end = _check_positive("t_end", t_end)
@@ -160,7 +178,17 @@ def resolve_settings(
     period_tol = (
         period_tolerance(rtol) if period_tol is None else _check_positive("period_tol", period_tol)
     )
+    if stop not in STOP_KINDS:
+        raise ValueError(f"stop must be one of {STOP_KINDS}, got {stop!r}")
+    if dwell is not None and stop != "converged":
+        raise ValueError("dwell is only used with stop='converged'")
+    extra = {}
+    if stop == "converged":
+        extra = dict(
+            stop=stop, dwell=DEFAULT_DWELL if dwell is None else _check_positive("dwell", dwell)
+        )
     return dict(
+        **extra,
         method=method,
         t_end=t_end,
         t_transient=t_transient,
@@ -189,6 +217,8 @@ def simulate(
     max_steps: int | None = None,
     equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
     period_tol: float | None = None,
+    stop: str = "fixed",
+    dwell: float | None = None,
 ) -> SimulationResult:
     """Integrate one trajectory and record its Poincare points.
 
@@ -225,6 +255,18 @@ def simulate(
         the friction law's stick band a "stuck" disk creeps at O(eps).
     period_tol : float, optional
         Relative tolerance of the period detector (default 1e4 rtol).
+    stop : {"fixed", "converged"}
+        ``"fixed"`` (default): run to ``t_end`` and record after ``t_transient``.
+        ``"converged"``: watch the run from t = 0 (``t_transient`` is not used)
+        and end it once it has converged: the Poincare points repeat with a
+        period p <= 64 to ``period_tol`` over at least 3 periods and 8 points,
+        or the disks have been at rest (speeds, and the belt-speed range, below
+        ``equilibrium_tol``) for ``dwell``. An orbit then records max(8, 4 p)
+        more points (at most ``max_points``), which are the ones returned.
+        ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
+    dwell : float, optional
+        Converged stopping: time at rest before a run ends as an equilibrium
+        (default 200, about 15 periods of the slowest free oscillation).
 
     Returns
     -------
@@ -241,7 +283,7 @@ def simulate(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     s = resolve_settings(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
-        period_tol,
+        period_tol, stop, dwell,
     )  # fmt: skip
     y_init = system.initial_state(y0)
     n = system.n_state
@@ -256,11 +298,14 @@ def simulate(
     stat_i = np.zeros(N_STAT_I, dtype=np.int64)
     stat_f = np.zeros(N_STAT_F)
     y_end = np.empty(n)
-    code = integrate(
+    code = call_interruptible(
+        integrate,
         METHODS.index(s["method"]), y_init, system.to_array(), system.n_oscillators,
         system.is_dc_motor, s["t_end"], s["t_transient"], s["rtol"], s["atol"], s["h"],
         s["max_steps"], s["equilibrium_tol"], ring, tring, samples,
         1.0 if sample_dt is None else sample_dt, y_end, stat_i, stat_f,
+        STOP_KINDS.index(stop), s.get("dwell", DEFAULT_DWELL), s["period_tol"], MAX_PERIOD,
+        abort=new_abort_flag(),
     )  # fmt: skip
     status = STATUS_NAMES[code]
     n_cross = int(stat_i[I_CROSSINGS])
@@ -293,6 +338,7 @@ def simulate(
         t_final=float(stat_f[F_T_FINAL]),
         final_state=y_end,
         amplitude=float(stat_f[F_AMPLITUDE]),
+        t_converged=float(stat_f[F_T_CONVERGED]),
         t=t,
         y=y,
         settings=s,

@@ -21,9 +21,17 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from .interrupt import call_interruptible, new_abort_flag
 from .io import ANALYSES, PER_VALUE_FIELDS, SweepFile, SweepLayout, read_sweep
 from .poincare import ORBIT_STATUSES, STATUS_NAMES
-from .simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD, resolve_settings
+from .simulate import (
+    DEFAULT_DWELL,
+    DEFAULT_EQUILIBRIUM_TOL,
+    MAX_PERIOD,
+    STOP_KINDS,
+    resolve_settings,
+)
+from .status import ST_NOT_COMPUTED
 from .system import PARAM_INDEX, SWEEPABLE, System
 from .trajectory import METHODS, SWEEP_INT_FIELDS, continuation_chunk, sweep_chunk
 
@@ -63,11 +71,27 @@ def _kernel_args(system: System, settings: dict) -> tuple:
         settings["period_tol"],
         MAX_PERIOD,
         settings["max_points"],
+        STOP_KINDS.index(settings.get("stop", "fixed")),
+        settings.get("dwell", DEFAULT_DWELL),
     )
 
 
-def _pack(points, t_points, ints, final_state) -> dict[str, np.ndarray]:
+def _checked(res: tuple) -> tuple:
+    """Refuse kernel output with a value that was never computed (never stored as a result)."""
+    status = res[2][..., SWEEP_INT_FIELDS.index("status")]
+    if np.any(status == ST_NOT_COMPUTED):
+        missing = int(np.count_nonzero(status == ST_NOT_COMPUTED))
+        raise RuntimeError(
+            f"internal error: {missing} value(s) of a chunk were not computed; nothing was stored"
+        )
+    return res
+
+
+def _pack(res: tuple, settings: dict) -> dict[str, np.ndarray]:
+    points, t_points, ints, t_converged, final_state = res
     out = {"points": points, "t_points": t_points, "final_state": final_state}
+    if settings.get("stop", "fixed") == "converged":
+        out["t_converged"] = t_converged
     for k, name in enumerate(SWEEP_INT_FIELDS):
         out[name] = ints[..., k]
     return out
@@ -82,11 +106,11 @@ def compute_restart_chunk(
     with the same compiled kernels, whatever the thread count.
     """
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    res = sweep_chunk(
-        METHODS.index(settings["method"]), y0, rows, *_kernel_args(system, settings),
-        numba.get_num_threads(),
+    res = call_interruptible(
+        sweep_chunk, METHODS.index(settings["method"]), y0, rows,
+        *_kernel_args(system, settings), numba.get_num_threads(), abort=new_abort_flag(),
     )  # fmt: skip
-    return _pack(*res)
+    return _pack(_checked(res), settings)
 
 
 def compute_continuation_chunk(
@@ -99,15 +123,17 @@ def compute_continuation_chunk(
 ) -> dict[str, np.ndarray]:
     """Continuation mode: ``values`` (C, L, len(names)) are C chains run in parallel.
 
-    Chain c starts from ``y_starts[c]``; each later value starts from the
-    previous one's final state (``y0`` if that was not finite).
+    Chain c starts from ``y_starts[c]``; each later value starts from the final
+    state of the last value before it that did not fail (nonfinite,
+    step-underflow, max-steps, error), ``y_starts[c]`` if none.
     """
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    res = continuation_chunk(
-        METHODS.index(settings["method"]), y0, np.ascontiguousarray(y_starts), rows,
-        *_kernel_args(system, settings),
+    res = call_interruptible(
+        continuation_chunk, METHODS.index(settings["method"]), y0,
+        np.ascontiguousarray(y_starts), rows, *_kernel_args(system, settings),
+        abort=new_abort_flag(),
     )  # fmt: skip
-    return _pack(*res)
+    return _pack(_checked(res), settings)
 
 
 # ----------------------------------------------------------------- the result

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .params import ETA_MAX, ETA_MIN, N_PARAMS, P_ETAP, PARAM_INDEX, eta_prime
+
 __all__ = [
     "System",
     "PARAM_INDEX",
@@ -27,26 +29,7 @@ __all__ = [
 ]
 
 DRIVES = ("constant", "dc-motor")
-ETA_MIN, ETA_MAX = 1.0, 10.0
 
-# Slots of the packed parameter array used by the compiled kernels. Slot P_ETAP
-# (eta') is derived from eta inside the kernels, never set by hand.
-P_M, P_K12, P_C, P_C12, P_MU, P_EPS, P_ETA, P_ETAP, P_VB, P_VB0, P_TB, P_BETA = range(12)
-N_PARAMS = 12
-
-PARAM_INDEX: dict[str, int] = {
-    "m": P_M,
-    "k12": P_K12,
-    "c": P_C,
-    "c12": P_C12,
-    "mu": P_MU,
-    "eps": P_EPS,
-    "eta": P_ETA,
-    "vb": P_VB,
-    "vb0": P_VB0,
-    "Tb": P_TB,
-    "beta": P_BETA,
-}
 #: Fields a sweep may vary (the float fields; ``n_oscillators`` changes the state size).
 SWEEPABLE = tuple(PARAM_INDEX)
 
@@ -280,8 +263,6 @@ class System:
 
     def to_array(self) -> np.ndarray:
         """Pack the float parameters for the compiled kernels (see PARAM_INDEX)."""
-        from .model import eta_prime  # local import: model imports this module's slots
-
         p = np.zeros(N_PARAMS)
         for name, idx in PARAM_INDEX.items():
             p[idx] = getattr(self, name)
