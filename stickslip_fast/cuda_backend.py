@@ -58,10 +58,9 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
 
 from numba import cuda, float64, int64, njit
 
-from . import model, poincare
-from .model import eta_prime
-from .poincare import STATUS_NAMES
-from .system import P_ETA, P_ETAP, P_VB0
+from . import linalg, model, poincare
+from .params import P_ETA, P_ETAP, P_VB0, eta_prime
+from .status import STATUS_NAMES
 from .tableaus import RODAS5P
 
 __all__ = [
@@ -91,6 +90,7 @@ _ST_OK = STATUS_NAMES.index("ok")
 _ST_NONFINITE = STATUS_NAMES.index("nonfinite")
 _ST_UNDERFLOW = STATUS_NAMES.index("step-underflow")
 _ST_MAX_STEPS = STATUS_NAMES.index("max-steps")
+_ST_ERROR = STATUS_NAMES.index("error")
 
 # Rodas5P as data: numba freezes module-level arrays into the kernel as constants.
 _GAMMA = float(RODAS5P.gamma)
@@ -168,6 +168,9 @@ jacobian_blocks = _device_callable(model.jacobian_blocks)
 motion_measure = _device_callable(poincare.motion_measure)
 classify = _device_callable(poincare.classify)
 detect_period = _device_callable(poincare.detect_period)
+# the bordered O(N) factorisation and solve of W = sigma I - J
+w_factor = _device_callable(linalg.w_factor)
+w_solve = _device_callable(linalg.w_solve)
 
 
 # ------------------------------------------------------------ device helpers
@@ -208,95 +211,6 @@ def _initial_step(y0, f0, p, n_osc, dc, rtol, atol, order, work, fwork):
     else:
         h1 = (0.01 / big) ** (1.0 / (order + 1.0))
     return min(100.0 * h0, h1)
-
-
-@cuda.jit(device=True)
-def _lu4(a, piv):
-    for k in range(4):
-        p = k
-        big = abs(a[k, k])
-        for r in range(k + 1, 4):
-            if abs(a[r, k]) > big:
-                big = abs(a[r, k])
-                p = r
-        piv[k] = p
-        if big == 0.0:
-            return False
-        if p != k:
-            for q in range(4):
-                tmp = a[k, q]
-                a[k, q] = a[p, q]
-                a[p, q] = tmp
-        inv = 1.0 / a[k, k]
-        for r in range(k + 1, 4):
-            a[r, k] *= inv
-            f = a[r, k]
-            if f != 0.0:
-                for q in range(k + 1, 4):
-                    a[r, q] -= f * a[k, q]
-    return True
-
-
-@cuda.jit(device=True)
-def _lu4_solve(a, piv, b, off):
-    for k in range(4):
-        p = piv[k]
-        if p != k:
-            tmp = b[off + k]
-            b[off + k] = b[off + p]
-            b[off + p] = tmp
-    for k in range(4):
-        s = b[off + k]
-        for q in range(k):
-            s -= a[k, q] * b[off + q]
-        b[off + k] = s
-    for k in range(3, -1, -1):
-        s = b[off + k]
-        for q in range(k + 1, 4):
-            s -= a[k, q] * b[off + q]
-        b[off + k] = s / a[k, k]
-
-
-@cuda.jit(device=True)
-def _w_factor(sigma, blocks, border_col, border_row, corner, n_osc, dc, lu, piv, z, tmp):
-    """W = sigma I - J, factored blockwise; returns the Schur complement (NaN if singular)."""
-    for i in range(n_osc):
-        for r in range(4):
-            for q in range(4):
-                lu[i, r, q] = -blocks[i, r, q]
-            lu[i, r, r] += sigma
-        if not _lu4(lu[i], piv[i]):
-            return math.nan
-    if not dc:
-        return 1.0
-    schur = sigma - corner
-    for i in range(n_osc):
-        for r in range(4):
-            tmp[r] = -border_col[i, r]
-        _lu4_solve(lu[i], piv[i], tmp, 0)
-        for r in range(4):
-            z[i, r] = tmp[r]
-            schur += border_row[i, r] * tmp[r]
-    if schur == 0.0:
-        return math.nan
-    return schur
-
-
-@cuda.jit(device=True)
-def _w_solve(lu, piv, z, border_row, schur, n_osc, dc, b):
-    for i in range(n_osc):
-        _lu4_solve(lu[i], piv[i], b, 4 * i)
-    if dc:
-        n = 4 * n_osc
-        s = b[n]
-        for i in range(n_osc):
-            for r in range(4):
-                s += border_row[i, r] * b[4 * i + r]
-        xv = s / schur
-        for i in range(n_osc):
-            for r in range(4):
-                b[4 * i + r] -= z[i, r] * xv
-        b[n] = xv
 
 
 @cuda.jit(device=True)
@@ -381,7 +295,7 @@ def get_kernel(n_osc: int, dc: bool):
     numba CUDA dispatcher
         ``kernel[blocks, threads](y0, params, t_end, t_transient, rtol, atol,
         h_fixed, max_steps, equilibrium_tol, period_tol, max_period, points,
-        t_points, ints, final_state)``: one thread per row of ``params``; the
+        t_points, ints, t_conv, final_state)``: one thread per row of ``params``; the
         outputs have the layout of :func:`stickslip_fast.trajectory.sweep_chunk`.
     """
     n_osc = int(n_osc)
@@ -402,7 +316,7 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
     @cuda.jit
     def sweep_kernel(
         y0, params, t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol,
-        period_tol, max_period, points, t_points, ints, final_state,
+        period_tol, max_period, points, t_points, ints, t_conv, final_state,
     ):  # fmt: skip
         v = cuda.grid(1)
         if v >= params.shape[0]:
@@ -430,7 +344,6 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
         lu = cuda.local.array((N_OSC, 4, 4), float64)
         piv = cuda.local.array((N_OSC, 4), int64)
         z = cuda.local.array((N_OSC, 4), float64)
-        tmp4 = cuda.local.array(4, float64)
         for i in range(N_OSC):
             for r in range(4):
                 jcol[i, r] = 0.0
@@ -440,6 +353,30 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
             y[i] = y0[i]
             ymin[i] = math.inf
             ymax[i] = -math.inf
+
+        t_conv[v] = math.nan  # converged stopping is not run on the GPU
+        # parameters or start not finite: "error", as the CPU kernel
+        bad = False
+        for i in range(p.shape[0]):
+            if not math.isfinite(p[i]):
+                bad = True
+        for i in range(NS):
+            if not math.isfinite(y[i]):
+                bad = True
+        if bad:
+            for k in range(cap):
+                tpts[k] = math.nan
+                for i in range(NS):
+                    pts[k, i] = math.nan
+            for i in range(NS):
+                final_state[v, i] = y[i]
+            ints[v, 0] = 0
+            ints[v, 1] = 0
+            ints[v, 2] = _ST_ERROR
+            ints[v, 3] = 0
+            ints[v, 4] = 0
+            ints[v, 5] = 0
+            return
 
         n_steps = 0
         n_rej = 0
@@ -465,7 +402,7 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
         jcorner = 0.0
 
         while t < t_end:
-            if n_steps >= max_steps:
+            if n_steps >= max_steps or n_rej >= max_steps:
                 status = _ST_MAX_STEPS
                 break
             if t + h >= t_end or (adaptive and t + 1.01 * h >= t_end):
@@ -476,9 +413,7 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
 
             # ---- one Rosenbrock step (transformed form), as integrators.rosenbrock_step
             ok = True
-            schur = _w_factor(
-                1.0 / (h * _GAMMA), jb, jcol, jrow, jcorner, N_OSC, DC, lu, piv, z, tmp4
-            )
+            schur = w_factor(1.0 / (h * _GAMMA), jb, jcol, jrow, jcorner, N_OSC, DC, lu, piv, z)
             if not math.isfinite(schur):
                 ok = False
             if ok:
@@ -499,7 +434,7 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
                         for j in range(st):
                             acc += _C[st, j] * K[j, i]
                         K[st, i] = ftmp[i] + inv_h * acc
-                    _w_solve(lu, piv, z, jrow, schur, N_OSC, DC, K[st])
+                    w_solve(lu, piv, z, jrow, schur, N_OSC, DC, K[st])
                     for i in range(NS):
                         if not math.isfinite(K[st, i]):
                             ok = False
@@ -534,7 +469,8 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
                 else:
                     h *= max(_FAC_MIN, _SAFETY * en ** (-1.0 / _Q))
                 last_rejected = True
-                if h < 1e-14 * max(1.0, abs(t)):
+                # "not >=" also catches a step size that is not a number
+                if not (h >= 1e-14 * max(1.0, abs(t))):
                     status = _ST_UNDERFLOW if ok else _ST_NONFINITE
                     break
                 continue
@@ -647,6 +583,7 @@ class _Launch:
             cuda.device_array((nv, mp, n), np.float64, stream=s),
             cuda.device_array((nv, mp), np.float64, stream=s),
             cuda.device_array((nv, len(SWEEP_INT_FIELDS)), np.int64, stream=s),
+            cuda.device_array(nv, np.float64, stream=s),
             cuda.device_array((nv, n), np.float64, stream=s),
         )
         blocks = max(1, (nv + threads_per_block - 1) // threads_per_block)
@@ -694,7 +631,8 @@ def compute_restart_chunk_cuda(
     check_available()
     _check_supported(system, settings)
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    return _pack(*_Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block).result())
+    launch = _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block)
+    return _pack(launch.result(), settings)
 
 
 def unsupported_reason(system, settings: dict) -> str | None:
@@ -706,6 +644,8 @@ def unsupported_reason(system, settings: dict) -> str | None:
         )
     if settings["method"] != "rodas5p":
         return f"the CUDA kernels implement method 'rodas5p' only (asked: {settings['method']!r})"
+    if settings.get("stop", "fixed") != "fixed":
+        return f"the CUDA kernels run to t_end (stop='fixed'; asked: {settings['stop']!r})"
     return None
 
 
@@ -756,10 +696,10 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
                 )
                 if len(in_flight) > 1:
                     done, launch = in_flight.popleft()
-                    yield done, _pack(*launch.result())
+                    yield done, _pack(launch.result(), settings)
             while in_flight:
                 done, launch = in_flight.popleft()
-                yield done, _pack(*launch.result())
+                yield done, _pack(launch.result(), settings)
         finally:  # closed early (an error, Ctrl-C): leave no kernel running behind us
             for _, launch in in_flight:
                 launch.stream.synchronize()
@@ -788,7 +728,7 @@ def kernel_signature():
     """The argument types of the sweep kernels (as launched by the backend)."""
     a1, a2, a3, i2 = float64[::1], float64[:, ::1], float64[:, :, ::1], int64[:, ::1]
     f, i = float64, int64
-    return (a1, a2, f, f, f, f, f, i, f, f, i, a3, a2, i2, a2)
+    return (a1, a2, f, f, f, f, f, i, f, f, i, a3, a2, i2, a1, a2)
 
 
 def compile_ptx(n_osc: int, dc: bool, cc: tuple[int, int] = (9, 0)) -> str:
