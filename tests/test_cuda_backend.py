@@ -16,10 +16,15 @@ import warnings
 import numpy as np
 import pytest
 
-# numba reads NUMBA_ENABLE_CUDASIM once, when numba.cuda is first imported.
+# numba.cuda chooses the simulator or the driver when it is first imported, from
+# numba's config (numba.core.config, read from the environment when numba was
+# imported, and re-read by reload_config()).
 if "numba.cuda" not in sys.modules:
+    import numba.core.config as _numba_config
+
     _old = os.environ.get("NUMBA_ENABLE_CUDASIM")
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+    _numba_config.reload_config()
     try:
         pytest.importorskip("numba_cuda", reason="numba-cuda (the [cuda] extra) is not installed")
         from numba import cuda  # noqa: F401  (binds the simulator for this process)
@@ -28,6 +33,7 @@ if "numba.cuda" not in sys.modules:
             del os.environ["NUMBA_ENABLE_CUDASIM"]
         else:
             os.environ["NUMBA_ENABLE_CUDASIM"] = _old
+        _numba_config.reload_config()
 else:
     pytest.importorskip("numba_cuda", reason="numba-cuda (the [cuda] extra) is not installed")
 
