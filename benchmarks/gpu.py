@@ -78,18 +78,15 @@ import numba  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
 from stickslip_fast import cuda_backend as cb  # noqa: E402
-from stickslip_fast.simulate import DEFAULT_EQUILIBRIUM_TOL, resolve_settings  # noqa: E402
-from stickslip_fast.sweep import compute_restart_chunk  # noqa: E402
+from stickslip_fast.chunks import WorkUnit, compute_restart_chunk  # noqa: E402
+from stickslip_fast.settings import Settings  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from common import cpu_model  # noqa: E402
 
 
 def settings_for(t_end, t_transient, max_points):
-    return resolve_settings(
-        "rodas5p", t_end, t_transient, None, None, None, max_points, None,
-        DEFAULT_EQUILIBRIUM_TOL, None,
-    )  # fmt: skip
+    return Settings.resolve("rodas5p", t_end, t_transient, max_points=max_points)
 
 
 # ------------------------------------------------------------------ device facts
@@ -153,15 +150,13 @@ def gpu_run(system, names, vals, settings, chunk, tpb, budget):
     y0 = system.initial_state(None)
     chunk = chunk or cb.default_chunk_size(system, settings)
     run = cb.cuda_runner(system, settings, "restart", threads_per_block=tpb)
-    from stickslip_fast.sweep import _Unit
-
     stop = []
 
     def units():  # after the budget, submit nothing more but collect what is in flight
         for a in range(0, len(vals), chunk):
             if stop:
                 return
-            yield _Unit("restart", vals[a : a + chunk], [])
+            yield WorkUnit("restart", vals[a : a + chunk], [])
 
     period, status, steps = [], [], []
     t0 = time.perf_counter()

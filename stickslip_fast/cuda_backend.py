@@ -574,7 +574,7 @@ class _Launch:
         kernel = get_kernel(system.n_oscillators, system.is_dc_motor)
         nv = rows.shape[0]
         n = int(y0.size)
-        mp = int(settings["max_points"])
+        mp = int(settings.max_points)
         self.stream = cuda.stream()
         s = self.stream
         d_params = cuda.to_device(_rows_with_etap(rows), stream=s)
@@ -588,10 +588,10 @@ class _Launch:
         )
         blocks = max(1, (nv + threads_per_block - 1) // threads_per_block)
         kernel[blocks, threads_per_block, s](
-            d_y0, d_params, float(settings["t_end"]), float(settings["t_transient"]),
-            float(settings["rtol"]), float(settings["atol"]), float(settings["h"]),
-            int(settings["max_steps"]), float(settings["equilibrium_tol"]),
-            float(settings["period_tol"]), int(max_period), *self.d_out,
+            d_y0, d_params, float(settings.t_end), float(settings.t_transient),
+            float(settings.rtol), float(settings.atol), float(settings.h),
+            int(settings.max_steps), float(settings.equilibrium_tol),
+            float(settings.period_tol), int(max_period), *self.d_out,
         )  # fmt: skip
 
     def result(self) -> tuple[np.ndarray, ...]:
@@ -615,7 +615,7 @@ def compute_restart_chunk_cuda(
     y0 : ndarray
         The initial state.
     settings : dict
-        From :func:`stickslip_fast.simulate.resolve_settings`; method "rodas5p".
+        :class:`stickslip_fast.settings.Settings`; method "rodas5p", stop "fixed".
     threads_per_block : int
         CUDA block size; results do not depend on it.
 
@@ -625,8 +625,8 @@ def compute_restart_chunk_cuda(
         As the CPU function: points, t_points, final_state and the per-value
         integer fields. Status and period equal the CPU's; points agree to ~1e-9.
     """
+    from .chunks import _pack, _param_rows
     from .simulate import MAX_PERIOD
-    from .sweep import _pack, _param_rows
 
     check_available()
     _check_supported(system, settings)
@@ -642,10 +642,10 @@ def unsupported_reason(system, settings: dict) -> str | None:
             f"the CUDA kernels are specialised for N <= {MAX_OSCILLATORS} disks "
             f"(this system has {system.n_oscillators})"
         )
-    if settings["method"] != "rodas5p":
-        return f"the CUDA kernels implement method 'rodas5p' only (asked: {settings['method']!r})"
-    if settings.get("stop", "fixed") != "fixed":
-        return f"the CUDA kernels run to t_end (stop='fixed'; asked: {settings['stop']!r})"
+    if settings.method != "rodas5p":
+        return f"the CUDA kernels implement method 'rodas5p' only (asked: {settings.method!r})"
+    if settings.stop != "fixed":
+        return f"the CUDA kernels run to t_end (stop='fixed'; asked: {settings.stop!r})"
     return None
 
 
@@ -656,7 +656,7 @@ def _check_supported(system, settings) -> None:
 
 
 def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THREADS_PER_BLOCK):
-    """The runner for ``sweep(backend="cuda")``: the contract of ``sweep._run_local``.
+    """The runner for ``sweep(backend="cuda")``: the contract of :func:`chunks.run_local`.
 
     Restart units run on the GPU, two launches in flight (the next unit
     computes while the previous one is copied back and written). What the
@@ -669,8 +669,8 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
     RuntimeError
         Without a GPU (and without NUMBA_ENABLE_CUDASIM=1).
     """
+    from .chunks import _pack, _param_rows, run_local
     from .simulate import MAX_PERIOD
-    from .sweep import _pack, _param_rows, _run_local
 
     check_available()
     why = unsupported_reason(system, settings)
@@ -685,7 +685,7 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
 
     def run(units, system, names, y0, settings) -> Iterator[tuple]:
         if why is not None:
-            yield from _run_local(units, system, names, y0, settings)
+            yield from run_local(units, system, names, y0, settings)
             return
         in_flight: deque = deque()
         try:
@@ -720,7 +720,7 @@ def default_chunk_size(system, settings: dict) -> int:
         return 64
     dev = cuda.get_current_device()
     fill = 2 * int(dev.MULTIPROCESSOR_COUNT) * int(dev.MAX_THREADS_PER_MULTIPROCESSOR)
-    per_value = 8 * ((settings["max_points"] + 1) * (system.n_state + 1) + 6)
+    per_value = 8 * ((settings.max_points + 1) * (system.n_state + 1) + 6)
     return int(max(1024, min(DEFAULT_CHUNK_SIZE, fill, CHUNK_BYTES // per_value)))
 
 

@@ -71,9 +71,10 @@ class System:
     k12 : float
         Stiffness coupling (k2 - k1) / (k1 + k2).
     c, c12 : float
-        Damping matrix [[c, c12], [c12, c]].
+        Damping matrix [[c, c12], [c12, c]]. Negative c (an energy source,
+        "negative damping") is allowed: runaway motion is classified, not an error.
     mu : float
-        Friction scale mu-bar.
+        Friction scale mu-bar (>= 0).
     eps : float
         Smoothing parameter eps-bar of the friction law. Must be > 0.
     eta : float
@@ -84,7 +85,7 @@ class System:
     vb : float
         Belt speed of the constant drive.
     vb0, Tb, beta : float
-        DC motor: no-load belt speed, time constant (> 0) and load coefficient.
+        DC motor: no-load belt speed, time constant (> 0) and load coefficient (>= 0).
     n_oscillators : int
         Number of disks N >= 1.
     """
@@ -121,6 +122,14 @@ class System:
             raise ValueError(f"System.eps must be > 0, got {self.eps!r}")
         if self.Tb <= 0:
             raise ValueError(f"System.Tb must be > 0, got {self.Tb!r}")
+        # friction scale and motor load are products of positive physical constants (Eqs. 6,
+        # 18); negative values would make friction drive the disk (docs/model.md)
+        for name in ("mu", "beta"):
+            if getattr(self, name) < 0:
+                raise ValueError(
+                    f"System.{name} must be >= 0 (it scales the friction force; a negative "
+                    f"value has no physical meaning), got {getattr(self, name)!r}"
+                )
         if not ETA_MIN <= self.eta <= ETA_MAX:
             raise ValueError(
                 f"System.eta must lie in [{ETA_MIN}, {ETA_MAX}] (the range of the paper's "
