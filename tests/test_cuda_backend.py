@@ -146,6 +146,7 @@ def test_falls_back_to_cpu_with_a_warning():
         (ASYM, dict(mode="continuation"), "continuation"),
         (ssf.System.preset("asymmetric", n_oscillators=5), {}, "N <= 4"),
         (ASYM, dict(method="dopri5"), "rodas5p"),
+        (ASYM, dict(stop="converged"), "stop='fixed'"),
     ]
     for system, extra, why in cases:
         with warnings.catch_warnings(record=True) as rec:
