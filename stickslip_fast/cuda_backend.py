@@ -18,16 +18,19 @@ on the CPU with a warning saying so.
 One source of the equations
 ---------------------------
 The kernel calls :func:`stickslip_fast.model.rhs`,
-:func:`~stickslip_fast.model.jacobian_blocks` and the classification helpers
-of :mod:`stickslip_fast.poincare` (:func:`motion_measure`, :func:`classify`,
-:func:`detect_period`) *as they are*: numba-cuda compiles a CPU ``@njit``
+:func:`~stickslip_fast.model.jacobian_blocks`, the bordered solve
+:func:`stickslip_fast.linalg.w_factor` / :func:`~stickslip_fast.linalg.w_solve`
+and the classification helpers of :mod:`stickslip_fast.poincare`
+(:func:`motion_measure`, :func:`classify`, :func:`detect_period`) *as they are*: numba-cuda compiles a CPU ``@njit``
 function called from a kernel into a device function from the same Python
 source (``CUDATypingContext.resolve_value_type`` wraps the dispatcher's
 ``py_func`` in a device ``CUDADispatcher``, recursively for the functions it
 calls, such as :func:`~stickslip_fast.model.friction_partials`). There is no
-second copy of the model to drift. Only the step loop is written here, because
-the CPU steppers allocate their workspaces and device code cannot. It mirrors
-:func:`stickslip_fast.trajectory.integrate` (Rodas5P branch) operation for
+second copy of the model to drift. Only the step loop is written here: the
+CPU's generic driver allocates its workspaces and dispatches through CPU-target
+``@overload``s, which device code cannot use. It mirrors
+:func:`stickslip_fast.driver.drive` with the Rodas5P stepper and the Poincare
+observer (and the classification of ``trajectory._run``) operation for
 operation; the tests compare the two value by value.
 
 Agreement with the CPU backend
@@ -516,7 +519,7 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
                 err_prev = max(en, 1e-10)
                 last_rejected = False
 
-        # ---- classification, as trajectory.integrate / _run_value
+        # ---- classification, as trajectory._run / _lane_values
         for i in range(NS):
             final_state[v, i] = y[i]
         amp = motion_measure(ymin, ymax, N_OSC, DC)
