@@ -167,16 +167,19 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     sw = cfg.sweep
     integ = dict(cfg.integration)
     integ.setdefault("max_points", 256)
-    backend = "local"
-    if args.scheduler or args.workers:
-        backend = "dask"
-    res = sweep(
-        cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
-        chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
-        progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
-        n_workers=args.workers, title=cfg.title, notes=cfg.notes,
-        analyses=sw.get("analyses", ()), **integ,
-    )  # fmt: skip
+    backend = args.backend or ("dask" if args.scheduler or args.workers else "local")
+    try:
+        res = sweep(
+            cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
+            chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
+            progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
+            n_workers=args.workers, title=cfg.title, notes=cfg.notes,
+            analyses=sw.get("analyses", ()), **integ,
+        )  # fmt: skip
+    except RuntimeError as exc:
+        if backend != "cuda":
+            raise
+        raise ValueError(str(exc)) from None  # no GPU: one line, not a traceback
     if not args.quiet:
         print(_report(res.path) if res.path is not None else repr(res))
     return 0
@@ -327,6 +330,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
     p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
     p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.add_argument(
+        "--backend",
+        choices=("local", "dask", "cuda"),
+        help="where values run (default: local, or dask with --scheduler/--workers); "
+        "cuda: one GPU thread per value (docs/gpu.md)",
+    )
     p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("info", help="summarise a result file")
