@@ -470,8 +470,24 @@ def diffrax_run(p, t_end, t_min, rtol, atol, integrate_only=False, dt=GRID_DT):
     return "ok", tp, pts
 
 
-def diffrax_sweep(P, t_end, t_min, rtol, atol, dt=GRID_DT, chunk=50, max_points=256):
-    """Kvaerno5 jitted and vmapped over the rows of P (in chunks, to bound the grid's memory)."""
+def diffrax_warm(P, n_ts, chunk=50):
+    """Compile the vmapped solve for a chunk of ``chunk`` values and an n_ts-point grid
+    (on a tiny time span, so the call itself is cheap)."""
+    import jax.numpy as jnp
+
+    fn = _diffrax_solver("vmap")
+    Pc = np.repeat(P[:1], chunk, axis=0)
+    fn(jnp.asarray(Pc), 1e-6, 1e-8, jnp.asarray(np.linspace(0.0, 1e-3, n_ts)))
+
+
+def diffrax_sweep(
+    P, t_end, t_min, rtol, atol, dt=GRID_DT, chunk=50, max_points=256, budget_s=math.inf
+):
+    """Kvaerno5 jitted and vmapped over the rows of P (in chunks, to bound the grid's memory).
+
+    Stops after the chunk that makes the projected total exceed ``budget_s``; ``done``
+    (the number of values solved) is returned last.
+    """
     import jax.numpy as jnp
 
     fn = _diffrax_solver("vmap")
@@ -483,7 +499,11 @@ def diffrax_sweep(P, t_end, t_min, rtol, atol, dt=GRID_DT, chunk=50, max_points=
     Y = np.full((nv, max_points, 4), np.nan)
     amp = np.zeros(nv)
     win = ts >= t_min
+    t_start = time.perf_counter()
+    done = 0
     for a in range(0, nv, chunk):
+        if done and (time.perf_counter() - t_start) * nv / done > budget_s:
+            break
         b = min(nv, a + chunk)
         Pc = P[a:b]
         if b - a < chunk:  # same shape for every chunk: no recompilation
@@ -499,4 +519,5 @@ def diffrax_sweep(P, t_end, t_min, rtol, atol, dt=GRID_DT, chunk=50, max_points=
             k = min(len(tp), max_points)
             T[i, :k] = tp[len(tp) - k :]
             Y[i, :k] = pts[len(tp) - k :]
-    return ok, counts, T, Y, amp
+        done = b
+    return ok, counts, T, Y, amp, done

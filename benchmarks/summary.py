@@ -101,6 +101,7 @@ def write_summary(r):
         else:
             L.append(f"| peak RSS of file-backed sweeps | {me['status']} | flat | pending |")
     L.append("")
+    L += summary_peers.readme_rows(r)
 
     if wp:
         L += ["## Work-precision", "", "![work-precision](work_precision.png)", ""]

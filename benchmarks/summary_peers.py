@@ -135,7 +135,7 @@ def peers_diagram(pd) -> list[str]:
             L.append(f"| {name} | not reached | - | - | - | {scan} |")
             continue
         t = rec.get("time_s")
-        extra = " (extrapolated)" if rec.get("serial_subset") else ""
+        extra = " (extrapolated)" if "wall_s_extrapolated" in ch else ""
         L.append(
             f"| {name} | {ch['rtol']:g} | {ch['n_agree']}/{ch['n_compared']} | "
             f"{'n/a' if t is None else f'{t:.3g}'}{extra} | {_x(rec.get('engine_speedup'))} | {scan} |"
@@ -226,3 +226,49 @@ def kernel_profile(pk) -> list[str]:
 
 def _n(x):
     return "n/a" if x is None else f"{x:.0f}"
+
+
+def readme_rows(r) -> list[str]:
+    """A performance table for the top-level README: only the peer sections of this run."""
+    sec = r["sections"]
+    pt = sec.get("peers_trajectory")
+    pd = sec.get("peers_diagram")
+    if not pt or pt.get("status") == "error":
+        return []
+    m = r["machine"]
+    L = [
+        "## Rows for the top-level README",
+        "",
+        f"Measured by `benchmarks/run.py` (sections peers_trajectory and peers_diagram of one "
+        f"run) on {m['cpu_model']}, {m['cores']} cores shared with other jobs (load average "
+        f"{', '.join(f'{x:.1f}' for x in m['loadavg_at_start'])} at start). Times at the "
+        "cheapest rtol (atol = 0.01 rtol) that meets the accuracy; speed-up = peer time / "
+        "engine time (below 1: the engine is slower).",
+        "",
+        "| case | accuracy | engine (rodas5p) | fastest peer | engine speed-up |",
+        "|---|---|---|---|---|",
+    ]
+    for key, case in pt["cases"].items():
+        for tgt, tab in case["tables"].items():
+            e = tab["rows"].get("engine rodas5p", {})
+            fp = tab.get("fastest_peer")
+            f = tab["rows"].get(fp, {}) if fp else {}
+            if not e.get("rtol") or not f.get("rtol"):
+                continue
+            L.append(
+                f"| {key}, t 1500, 1 core | points within {float(tgt):g} | "
+                f"{e['time_points'] * 1e3:.1f} ms (rtol {e['rtol']:g}) | {fp}: "
+                f"{f['time_points'] * 1e3:.1f} ms (rtol {f['rtol']:g}) | "
+                f"{tab['engine_speedup_vs_fastest']:.2f}x |"
+            )
+    if pd and pd.get("status") != "error" and pd.get("fastest_peer"):
+        e = pd["solvers"]["engine rodas5p"]
+        f = pd["solvers"][pd["fastest_peer"]]
+        L.append(
+            f"| Fig. 6 diagram, {pd['config']['n_values']} values, {pd['cores']} cores | >= 99 % "
+            f"same status/period, points within 1e-6 | {e['time_s']:.1f} s (rtol "
+            f"{e['chosen']['rtol']:g}) | {pd['fastest_peer']}: {f['time_s']:.1f} s (rtol "
+            f"{f['chosen']['rtol']:g}) | {pd['engine_speedup_vs_fastest']:.2f}x |"
+        )
+    L.append("")
+    return L
