@@ -338,7 +338,7 @@ def run(mode: str, log) -> dict:
     # side by side: the engine and the parallel peers re-timed at their chosen rtol,
     # alternating, best of two (the scan's first run included compilation)
     timed = {}
-    for _ in range(1 if mode == "quick" else 2):
+    for _ in range(0 if mode == "quick" else 2):  # quick: the scan's time
         for name, rec in out["solvers"].items():
             ch = rec["chosen"]
             if ch is None or rec["serial_subset"] or "values_run" in ch:
@@ -351,7 +351,10 @@ def run(mode: str, log) -> dict:
         if ch is None:
             rec["time_s"] = None
             continue
-        rec["time_s"] = ch["wall_s_extrapolated"] if "wall_s_extrapolated" in ch else timed[name]
+        if "wall_s_extrapolated" in ch:
+            rec["time_s"] = ch["wall_s_extrapolated"]
+        else:
+            rec["time_s"] = timed.get(name, ch["wall_s"])
     eng = out["solvers"].get("engine rodas5p", {}).get("time_s")
     for name, rec in out["solvers"].items():
         if eng and rec.get("time_s") and name != "engine rodas5p":

@@ -52,7 +52,7 @@ CASES = {
 SETTINGS = {
     "full": dict(rounds=5, budget_s=20.0, scan_cap_s=60.0, targets=TARGETS, ladder=LADDER),
     "quick": dict(
-        rounds=1, budget_s=2.0, scan_cap_s=5.0, targets=(1e-6,), ladder=[1e-6, 1e-7, 1e-8, 1e-9]
+        rounds=1, budget_s=2.0, scan_cap_s=5.0, targets=(1e-6,), ladder=[1e-7, 1e-8, 1e-9]
     ),
 }
 # peers run in quick mode (the CI smoke test must not need the optional ones)
