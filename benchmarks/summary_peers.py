@@ -161,10 +161,7 @@ def kernel_profile(pk) -> list[str]:
         ("error_norm+controller", "error norm + PI controller (2 pow)"),
         ("rosenbrock_step", "one whole `rosenbrock_step` call (factor, 7 RHS, 8 solves)"),
     ):
-        L.append(
-            f"| {label} | {en.get(k, '-') if isinstance(en.get(k), str) else _n(en.get(k))} | "
-            f"{_n(pl.get(k))} |"
-        )
+        L.append(f"| {label} | {_n(en.get(k))} | {_n(pl.get(k))} |")
     ss = pk["rodas5p_attempt_sum_ns"]
     L.append(
         f"| **sum for one Rodas5P attempt** (8 RHS, 1 Jacobian, 1 factor, 8 solves, norm) | "
