@@ -756,6 +756,7 @@ def load_census(
     labels, attractors and tracks are also stored in the file.
     """
     data = read_census(path)
+    data["status"] = np.where(data["done"] == 1, data["status"], -1).astype(data["status"].dtype)
     cfg = data["config"]
     sysd = {k: v for k, v in cfg["system"].items() if v is not None}
     param = cfg["param"]
