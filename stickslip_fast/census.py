@@ -327,9 +327,11 @@ def classify_census(
         1e4 rtol).
     track_threshold : float
         Largest distance for two attractors at neighbouring values to be one
-        track: the Hausdorff distance of their point sets, each state variable
-        divided by its spread over the whole census. Also groups the
-        "unresolved" runs of one value.
+        track: the Hausdorff distance of their point sets (max norm), each
+        state variable divided by its spread over all attractors of the census
+        (at least the identity tolerance, so that a census with a single
+        equilibrium does not divide by zero). Also groups the "unresolved"
+        runs of one value.
 
     Returns
     -------
@@ -381,7 +383,10 @@ def classify_census(
     if allpts:
         stack = np.concatenate(allpts, axis=0)
         spread = np.nanmax(stack, axis=0) - np.nanmin(stack, axis=0)
-        scale = np.maximum(spread, 1e-6 * max(float(spread.max()), 1e-300))
+        # differences below the identity tolerance never count (e.g. a census whose
+        # only attractor is one equilibrium has no spread at all)
+        floor = identity_tol * (1.0 + float(np.nanmax(np.abs(stack))))
+        scale = np.maximum(spread, floor)
     else:
         scale = np.ones(n_state)
 

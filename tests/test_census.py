@@ -309,3 +309,45 @@ def test_bad_input_is_named(kwargs, match):
 def test_converged_stop_is_not_available_yet():
     with pytest.raises(NotImplementedError, match="stop"):
         census(ASYM, "eta", [2.0], t_end=10.0, stop="converged")
+
+
+def test_a_lone_equilibrium_branch_is_one_track():
+    """Steady sliding moving by round-off-sized steps stays one track (no spread to divide by)."""
+    raw = _raw(5, 2)
+    for i in range(5):
+        for j in range(2):
+            _set_rest(raw, i, j, [0.136 + 1e-9 * i, 0.0, 0.109, 0.0])
+    labels, _, tracks = classify_census(np.arange(5.0), raw, period_tol=1e-5)
+    assert np.all(labels == 0) and len(tracks) == 1
+
+
+def test_cli_census_and_info(tmp_path, capsys, eta2_4):
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        textwrap.dedent(
+            """
+            title = "census test"
+            [system]
+            preset = "asymmetric"
+            [integration]
+            t_end = 600.0
+            t_transient = 300.0
+            [census]
+            param = "eta"
+            values = [2.0, 4.0]
+            n_starts = 16
+            """
+        )
+    )
+    out = tmp_path / "c.h5"
+    assert main(["census", str(cfg), "-o", str(out), "--quiet"]) == 0
+    np.testing.assert_array_equal(load_census(out).labels, eta2_4.labels)
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "(census)" in text and "32 of 32 runs done" in text and "orbit P1" in text
+    cfg.write_text(cfg.read_text().replace("n_starts = 16", "n_starts = 16\nstarts_box = 1"))
+    assert main(["census", str(cfg), "-o", str(tmp_path / "d.h5")]) == 2
+    assert "starts_box" in capsys.readouterr().err
