@@ -751,16 +751,22 @@ def load_census(
     path: str | Path,
     *,
     identity_tol: float | None = None,
-    track_threshold: float = DEFAULT_TRACK_THRESHOLD,
+    track_threshold: float | None = None,
     _write: bool = False,
 ) -> CensusResult:
     """Open a census file as a :class:`CensusResult` (classified from its runs).
 
     Runs not computed yet (an unfinished file) are labelled -1 with status
-    "missing". With ``_write`` (what :func:`census` does when it finishes) the
-    labels, attractors and tracks are also stored in the file.
+    "missing". ``identity_tol`` and ``track_threshold`` (see
+    :func:`classify_census`) default to those the file was classified with,
+    else to the defaults. With ``_write`` (what :func:`census` does when it
+    finishes) the labels, attractors and tracks are also stored in the file.
     """
     data = read_census(path)
+    if identity_tol is None and not _write:
+        identity_tol = data["attrs"].get("identity_tol")
+    if track_threshold is None:
+        track_threshold = data["attrs"].get("track_threshold", DEFAULT_TRACK_THRESHOLD)
     data["status"] = np.where(data["done"] == 1, data["status"], -1).astype(data["status"].dtype)
     cfg = data["config"]
     sysd = {k: v for k, v in cfg["system"].items() if v is not None}

@@ -348,6 +348,14 @@ def test_cli_census_and_info(tmp_path, capsys, eta2_4):
     assert main(["info", str(out)]) == 0
     text = capsys.readouterr().out
     assert "(census)" in text and "32 of 32 runs done" in text and "orbit P1" in text
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import plot_bifurcation
+
+    png = tmp_path / "c.png"
+    assert plot_bifurcation.main([str(out), "-o", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+    fig = plot_bifurcation.plot_census(load_census(out))
+    assert len(fig.axes) == 3 and fig.axes[-1].get_ylim() == (0.0, 1.0)
     cfg.write_text(cfg.read_text().replace("n_starts = 16", "n_starts = 16\nstarts_box = 1"))
     assert main(["census", str(cfg), "-o", str(tmp_path / "d.h5")]) == 2
     assert "starts_box" in capsys.readouterr().err
