@@ -604,8 +604,9 @@ def census(
         HDF5 file to stream into (docs/file-format.md, census file); running
         the same census on it again resumes, a different one is refused.
     threads, chunk_size, backend, scheduler, n_workers, progress
-        As for :func:`sweep` (``chunk_size`` counts (value, start) pairs;
-        default 32 per thread). Results do not depend on them.
+        As for :func:`sweep`; ``chunk_size`` counts (value, start) pairs per
+        unit of work (default 32 per thread; 64 with ``backend="dask"``, each
+        unit split over the workers). Results do not depend on them.
     method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol
         As for :func:`sweep`; ``max_points`` defaults to 128 (enough to
         detect any period <= 64).
@@ -688,7 +689,9 @@ def census(
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))
         if chunk_size is None:
-            chunk_size = 32 * nthreads if backend == "local" else runner.default_chunk_size
+            # the Dask runner splits each unit over its workers and waits for the whole
+            # unit before the next: units of 64 pairs keep a small cluster busy
+            chunk_size = 32 * nthreads if backend == "local" else 64
         elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
             raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
         if out is not None:
