@@ -359,3 +359,34 @@ def test_cli_census_and_info(tmp_path, capsys, eta2_4):
     cfg.write_text(cfg.read_text().replace("n_starts = 16", "n_starts = 16\nstarts_box = 1"))
     assert main(["census", str(cfg), "-o", str(tmp_path / "d.h5")]) == 2
     assert "starts_box" in capsys.readouterr().err
+
+
+def test_transitions_of_the_zero_start_are_classified():
+    """Constructed: sliding E everywhere, orbit A on values 2..4; start 0 on A at 2..3 only."""
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import census_transitions
+
+    from stickslip_fast.census import CensusResult
+
+    n_v, n_s = 6, 3
+    vals = np.arange(float(n_v))
+    raw = _raw(n_v, n_s)
+    e = [0.136, 0.0, 0.109, 0.0]
+    a = np.array([[0.1, 0.0, 0.12, 0.0]])
+    for i in range(n_v):
+        _set_rest(raw, i, 1, e)
+        for j, on_a in ((2, 2 <= i <= 4), (0, i in (2, 3))):
+            if on_a:
+                _set_orbit(raw, i, j, a)
+            else:
+                _set_rest(raw, i, j, e)
+    labels, atts, tracks = classify_census(vals, raw, period_tol=1e-5)
+    res = CensusResult("eta", vals, np.zeros((n_s, 4)), labels, raw["status"], raw["period"],
+                       atts, tracks, ["x1", "dx1", "phi1", "dphi1"], ASYM, {})  # fmt: skip
+    rows = census_transitions.transitions(res)
+    assert [(r["from_value"], r["to_value"]) for r in rows] == [(1.0, 2.0), (3.0, 4.0)]
+    assert rows[0]["new_born"] and not rows[0]["old_dies"]
+    assert rows[0]["verdict"].startswith("bifurcation")
+    assert not rows[1]["old_dies"] and not rows[1]["new_born"]
+    assert rows[1]["verdict"].startswith("basin-boundary crossing")
+    assert rows[1]["old_track"] == "goes on to 4"
