@@ -35,7 +35,7 @@ import numpy as np
 
 from .io import CensusFile, CensusLayout, read_census, write_census_classification
 from .poincare import STATUS_NAMES
-from .simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD, resolve_settings
+from .simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD
 from .system import SWEEPABLE, System
 
 __all__ = [
@@ -67,6 +67,35 @@ _BACKENDS = ("local", "dask")
 _ST_OK = STATUS_NAMES.index("ok")
 _ST_EQ = STATUS_NAMES.index("equilibrium")
 _ST_STALLED = STATUS_NAMES.index("stalled")
+
+
+# ------------------------------------------------------- settings and runner
+# The pylayer refactor moves the integration settings to settings.Settings and the
+# local runner to chunks.run_local; these two helpers accept either layout, so this
+# module works whichever is merged first (drop the fallbacks once both are on main).
+def _resolve_settings(**kw):
+    """Validated integration settings, as the sweep runners expect them."""
+    try:
+        from .settings import Settings
+    except ImportError:
+        from .simulate import resolve_settings
+
+        keys = ("method", "t_end", "t_transient", "rtol", "atol", "h", "max_points",
+                "max_steps", "equilibrium_tol", "period_tol")  # fmt: skip
+        return resolve_settings(*(kw[k] for k in keys))
+    return Settings.resolve(**kw)
+
+
+def _settings_dict(settings) -> dict:
+    return settings.to_dict() if hasattr(settings, "to_dict") else dict(settings)
+
+
+def _local_runner():
+    try:
+        from .chunks import run_local
+    except ImportError:
+        from .sweep import _run_local as run_local
+    return run_local
 
 
 # ------------------------------------------------------------------ the starts
@@ -628,7 +657,7 @@ def census(
         For ``stop="converged"`` until the compiled driver supports it.
     """
     from . import __version__
-    from .sweep import _numba_threads, _run_local
+    from .sweep import _numba_threads
 
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
@@ -660,9 +689,10 @@ def census(
     start_arr, box_arr = _check_starts(
         system, n_starts, box, starts, seed, include_zero, param, vals
     )
-    settings = resolve_settings(
-        method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
-        period_tol,
+    settings = _resolve_settings(
+        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,
+        max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
+        period_tol=period_tol,
     )  # fmt: skip
     base = system.to_dict()
     base[param] = None
@@ -675,12 +705,12 @@ def census(
         "n_starts": len(start_arr),
         "starts_sha256": _values_digest(start_arr),
         "stop": stop,
-        "settings": dict(settings),
+        "settings": _settings_dict(settings),
     }
     layout = CensusLayout(param, vals, start_arr, settings["max_points"], system.state_names)
     y0 = system.initial_state(None)
     n_v, n_s = len(vals), len(start_arr)
-    runner = _run_local
+    runner = _local_runner()
     if backend == "dask":
         from .backends import dask_runner
 
@@ -746,7 +776,8 @@ def census(
     return CensusResult(
         param=param, values=vals, starts=start_arr, labels=labels, status_code=mem["status"],
         period=mem["period"], attractors=attractors, tracks=tracks,
-        state_names=system.state_names, system=system, settings=settings, raw=mem,
+        state_names=system.state_names, system=system, settings=_settings_dict(settings),
+        raw=mem,
     )  # fmt: skip
 
 
