@@ -10,7 +10,7 @@ resumable: re-running continues an interrupted sweep) or the single run
 configuration) into ``OUT/data/*.h5``, then draws ``OUT/figNN.png`` from those
 HDF5 files only (scripts/plot_bifurcation.py, scripts/plot_timeseries.py).
 Figs. 1 and 8 are schematics, not results. The N = 2 sweeps (Figs. 14, 16) also
-store the cheap synchronization measure (``analyses=("sync",)``).
+store the cheap synchronization measure (``analyses = ["sync"]`` in their configs).
 
 ``--quick`` (for CI) uses 12 values per sweep and a tenth of the times
 (t_end and t_transient divided by 10); its data files get a ``_quick`` suffix so
@@ -55,7 +55,6 @@ class Figure:
     kind: str  # "sweep" | "run"
     configs: tuple[str, ...]
     variables: tuple[str, ...] | None = None
-    analyses: tuple[str, ...] = ()
 
 
 FIGURES: tuple[Figure, ...] = (
@@ -70,13 +69,13 @@ FIGURES: tuple[Figure, ...] = (
     Figure("11", "run", ("fig11_symmetric_dcmotor_eta9.95.toml",)),
     Figure("12", "sweep", ("fig12_asymmetric_dcmotor.toml",)),
     Figure("13", "run", ("fig13_asymmetric_dcmotor_eta9.99.toml",)),
-    Figure("14", "sweep", ("fig14_symmetric_dcmotor_N2.toml",), analyses=("sync",)),
+    Figure("14", "sweep", ("fig14_symmetric_dcmotor_N2.toml",)),
     Figure(
         "15",
         "run",
         ("fig15ab_symmetric_dcmotor_N2_eta1.1.toml", "fig15_symmetric_dcmotor_N2_eta9.99.toml"),
     ),  # fmt: skip
-    Figure("16", "sweep", ("fig16_asymmetric_dcmotor_N2.toml",), analyses=("sync",)),
+    Figure("16", "sweep", ("fig16_asymmetric_dcmotor_N2.toml",)),
     Figure("17", "run", ("fig17_asymmetric_dcmotor_N2_eta1.5.toml",)),
     Figure("18", "run", ("fig18_asymmetric_dcmotor_N2_eta8.toml",)),
 )
@@ -106,12 +105,7 @@ def _quick(cfg: RunConfig) -> RunConfig:
                      source=cfg.source, raw=raw)  # fmt: skip
 
 
-def run_config(
-    cfg: RunConfig,
-    out: Path,
-    analyses: tuple[str, ...] = (),
-    threads: int | None = None,
-) -> Path:
+def run_config(cfg: RunConfig, out: Path, threads: int | None = None) -> Path:
     """Compute one config into an HDF5 file: a sweep (resumable) or a single run.
 
     Parameters
@@ -121,8 +115,6 @@ def run_config(
         The HDF5 file. A sweep resumes an existing file of the same
         configuration; a single run is skipped when ``out`` holds the same
         configuration and recomputed otherwise.
-    analyses : tuple of str
-        Sweep analyses (see :func:`stickslip_fast.sweep`).
     threads : int, optional
         Numba threads for sweeps.
 
@@ -140,7 +132,7 @@ def run_config(
             ssf.sweep(
                 cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
                 chunk_size=sw.get("chunk_size"), out=out, threads=threads, progress=False,
-                title=cfg.title, notes=cfg.notes, analyses=analyses, **integ,
+                title=cfg.title, notes=cfg.notes, analyses=sw.get("analyses", ()), **integ,
             )  # fmt: skip
             return out
         if out.exists():
@@ -205,7 +197,7 @@ def make_figures(
             if quick:
                 cfg = _quick(cfg)
             h5 = data_dir / (Path(name).stem + ("_quick" if quick else "") + ".h5")
-            files.append(run_config(cfg, h5, fig.analyses, threads))
+            files.append(run_config(cfg, h5, threads))
         image = out / f"fig{fig.number}.{fmt}"
         if fig.kind == "sweep":
             plot_bifurcation.plot_sweep(files[0], image, fig.variables, period_panel=True,

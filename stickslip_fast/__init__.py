@@ -13,6 +13,11 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
+from . import cache_guard as _cache_guard
+
+_cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
+
+# ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
 from .census import CensusResult, census, load_census
 from .poincare import STATUS_NAMES

@@ -3,8 +3,8 @@
 :func:`dask_runner` returns a runner with the contract of the local one,
 ``run(units, system, names, y0, settings) -> iterator of (unit, result)``: each
 unit (or part of one) becomes a Dask task that calls the pure chunk functions
-:func:`~stickslip_fast.sweep.compute_restart_chunk` /
-:func:`~stickslip_fast.sweep.compute_continuation_chunk` unchanged, and the
+:func:`~stickslip_fast.chunks.compute_restart_chunk` /
+:func:`~stickslip_fast.chunks.compute_continuation_chunk` unchanged, and the
 results come back to the client, which alone writes the result file.
 
 * Restart units are independent: a bounded window of them is kept in flight
@@ -28,7 +28,6 @@ naming the extra to install when ``distributed`` is missing.
 from __future__ import annotations
 
 import asyncio
-import functools
 import hashlib
 import itertools
 import json
@@ -39,6 +38,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .cache_guard import fingerprint
+from .chunks import compute_continuation_chunk, compute_restart_chunk
+from .settings import Settings
+from .system import System
+from .trajectory import continuation_chunk, sweep_chunk
 
 try:  # the plugin base class; a stand-in keeps this module importable without Dask
     from distributed import WorkerPlugin as _WorkerPluginBase
@@ -73,27 +78,6 @@ _task_threads: int | None = None
 
 
 # ------------------------------------------------------------ worker side
-@functools.lru_cache(maxsize=1)
-def fingerprint() -> str:
-    """Identity of the code that computes results: package sources + Numba version.
-
-    Two processes with the same fingerprint compute the same bits from the same
-    inputs (on the same kind of CPU). Computed once per process.
-
-    Returns
-    -------
-    str
-        SHA-256 (hex) of every ``*.py`` file of the package (sorted by name)
-        and of the Numba version.
-    """
-    import numba
-
-    digest = hashlib.sha256(f"numba {numba.__version__}\n".encode())
-    for path in sorted(Path(__file__).parent.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
 def _set_task_threads() -> int:
     import numba
 
@@ -123,17 +107,11 @@ def warm_up(numba_threads: int | None = None) -> dict[str, Any]:
     """
     global _task_threads
     t0 = time.perf_counter()
-    from .simulate import DEFAULT_EQUILIBRIUM_TOL, resolve_settings
-    from .sweep import compute_continuation_chunk, compute_restart_chunk
-    from .system import System
-    from .trajectory import continuation_chunk, sweep_chunk
 
     _task_threads = numba_threads
     threads = _set_task_threads()
     system = System.preset("asymmetric")
-    settings = resolve_settings(
-        "rodas5p", 1.0, 0.0, None, None, None, 2, None, DEFAULT_EQUILIBRIUM_TOL, None
-    )
+    settings = Settings.resolve("rodas5p", 1.0, 0.0, max_points=2)
     y0 = system.initial_state(None)
     compute_restart_chunk(system, ("eta",), np.array([[5.0]]), y0, settings)
     compute_continuation_chunk(system, ("eta",), np.array([[[5.0]]]), y0[None, :], y0, settings)
@@ -183,7 +161,7 @@ def _compute(
     values: np.ndarray,
     y_starts: np.ndarray | None,
     y0: np.ndarray,
-    settings: dict,
+    settings: Settings,
     expected: str,
 ) -> dict[str, np.ndarray]:
     """The task: one (part of a) unit through the unchanged pure chunk function."""
@@ -196,8 +174,6 @@ def _compute(
             f"than the client (fingerprint {fingerprint()[:12]} != {expected[:12]}); install "
             "the same stickslip_fast and numba versions on every machine"
         )
-    from .sweep import compute_continuation_chunk, compute_restart_chunk
-
     _set_task_threads()
     if kind == "restart":
         return compute_restart_chunk(system, names, values, y0, settings)
@@ -316,7 +292,7 @@ class _DaskRunner:
 
     def __call__(
         self, units: Iterable[Any], system: Any, names: tuple[str, ...], y0: np.ndarray,
-        settings: dict,
+        settings: Settings,
     ) -> Iterator[tuple[Any, dict[str, np.ndarray]]]:  # fmt: skip
         distributed = _require_distributed()
         units = iter(units)
@@ -348,10 +324,10 @@ class _Session:
         self.client = client
         self.args = (system, tuple(names))
         self.y0 = np.asarray(y0, dtype=float)
-        self.settings = dict(settings)
+        self.settings = settings
         self.expected = fingerprint()
         # everything a task computes from, except its values and start states
-        self.context = (system.to_dict(), list(names), self.y0, self.settings)
+        self.context = (system.to_dict(), list(names), self.y0, settings.to_dict())
         self.handed_back: set[str] = set()
         self._threads = (0.0, 1)
 
@@ -461,7 +437,7 @@ def dask_runner(scheduler: str | None = None, n_workers: int | None = None) -> C
     -------
     callable
         ``run(units, system, names, y0, settings)`` -> iterator of
-        ``(unit, result)``, the contract of ``sweep._run_local``; results
+        ``(unit, result)``, the contract of :func:`stickslip_fast.chunks.run_local`; results
         arrive in completion order, each unit exactly once. It has the
         attribute ``default_chunk_size`` (values per task when the sweep does
         not set ``chunk_size``) and, after a run, ``workers`` (what each

@@ -35,7 +35,8 @@ import numpy as np
 
 from .io import CensusFile, CensusLayout, read_census, write_census_classification
 from .poincare import STATUS_NAMES
-from .simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD
+from .settings import DEFAULT_EQUILIBRIUM_TOL, STOP_KINDS, Settings
+from .simulate import MAX_PERIOD
 from .system import SWEEPABLE, System
 
 __all__ = [
@@ -54,9 +55,9 @@ __all__ = [
 #: Attractor kinds, in the order of their integer codes in the file.
 KINDS = ("orbit", "equilibrium", "stalled", "unresolved")
 K_ORBIT, K_EQUILIBRIUM, K_STALLED, K_UNRESOLVED = range(4)
-#: Stop rules: "fixed" integrates every run to t_end; "converged" (ends a run once
-#: its points repeat or it is at rest) is wired by the compiled driver.
-STOP_RULES = ("fixed", "converged")
+#: Stop rules (as :func:`simulate`): "fixed" integrates every run to t_end;
+#: "converged" ends a run once its points repeat or it has come to rest.
+STOP_RULES = STOP_KINDS
 #: Default identity tolerance relative to the period tolerance (see :func:`census`).
 IDENTITY_FACTOR = 100.0
 #: Default track-matching threshold, as a fraction of the census' spread per variable.
@@ -67,35 +68,6 @@ _BACKENDS = ("local", "dask")
 _ST_OK = STATUS_NAMES.index("ok")
 _ST_EQ = STATUS_NAMES.index("equilibrium")
 _ST_STALLED = STATUS_NAMES.index("stalled")
-
-
-# ------------------------------------------------------- settings and runner
-# The pylayer refactor moves the integration settings to settings.Settings and the
-# local runner to chunks.run_local; these two helpers accept either layout, so this
-# module works whichever is merged first (drop the fallbacks once both are on main).
-def _resolve_settings(**kw):
-    """Validated integration settings, as the sweep runners expect them."""
-    try:
-        from .settings import Settings
-    except ImportError:
-        from .simulate import resolve_settings
-
-        keys = ("method", "t_end", "t_transient", "rtol", "atol", "h", "max_points",
-                "max_steps", "equilibrium_tol", "period_tol")  # fmt: skip
-        return resolve_settings(*(kw[k] for k in keys))
-    return Settings.resolve(**kw)
-
-
-def _settings_dict(settings) -> dict:
-    return settings.to_dict() if hasattr(settings, "to_dict") else dict(settings)
-
-
-def _local_runner():
-    try:
-        from .chunks import run_local
-    except ImportError:
-        from .sweep import _run_local as run_local
-    return run_local
 
 
 # ------------------------------------------------------------------ the starts
@@ -594,6 +566,7 @@ def census(
     max_steps: int | None = None,
     equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
     period_tol: float | None = None,
+    dwell: float | None = None,
     identity_tol: float | None = None,
     track_threshold: float = DEFAULT_TRACK_THRESHOLD,
     title: str = "",
@@ -627,8 +600,10 @@ def census(
     include_zero : bool
         Make start 0 the zero state (the paper's initial condition).
     stop : {"fixed", "converged"}
-        Stop rule of every run. "fixed" integrates to ``t_end``. "converged"
-        (end a run early once its points repeat) is not available yet.
+        Stop rule of every run, as for :func:`simulate`: "fixed" integrates to
+        ``t_end``; "converged" ends a run once its Poincare points repeat or it
+        has come to rest (``t_end`` is the cap), and stores each run's
+        ``t_converged``.
     out : path, optional
         HDF5 file to stream into (docs/file-format.md, census file); running
         the same census on it again resumes, a different one is refused.
@@ -636,9 +611,9 @@ def census(
         As for :func:`sweep`; ``chunk_size`` counts (value, start) pairs per
         unit of work (default 32 per thread; 64 with ``backend="dask"``, each
         unit split over the workers). Results do not depend on them.
-    method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol
+    method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol, dwell
         As for :func:`sweep`; ``max_points`` defaults to 128 (enough to
-        detect any period <= 64).
+        detect any period <= 64); ``dwell`` only with ``stop="converged"``.
     identity_tol, track_threshold : float
         See :func:`classify_census`; they do not change the runs, so a finished
         file can be re-classified with other values (:func:`load_census`).
@@ -653,10 +628,9 @@ def census(
     ------
     ValueError
         For bad input, naming the argument.
-    NotImplementedError
-        For ``stop="converged"`` until the compiled driver supports it.
     """
     from . import __version__
+    from .chunks import run_local
     from .sweep import _numba_threads
 
     if not isinstance(system, System):
@@ -673,11 +647,6 @@ def census(
             raise ValueError(f"value {v!r} of param {param!r} is invalid: {exc}") from None
     if stop not in STOP_RULES:
         raise ValueError(f"stop must be one of {STOP_RULES}, got {stop!r}")
-    if stop == "converged":
-        raise NotImplementedError(
-            "stop='converged' needs the compiled driver's converged stop rule, which is not "
-            "available yet; use stop='fixed'"
-        )
     if backend not in _BACKENDS:
         raise ValueError(f"backend must be one of {_BACKENDS}, got {backend!r}")
     if backend == "local" and (scheduler is not None or n_workers is not None):
@@ -689,10 +658,10 @@ def census(
     start_arr, box_arr = _check_starts(
         system, n_starts, box, starts, seed, include_zero, param, vals
     )
-    settings = _resolve_settings(
+    settings = Settings.resolve(
         method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,
         max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
-        period_tol=period_tol,
+        period_tol=period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
     base = system.to_dict()
     base[param] = None
@@ -705,12 +674,14 @@ def census(
         "n_starts": len(start_arr),
         "starts_sha256": _values_digest(start_arr),
         "stop": stop,
-        "settings": _settings_dict(settings),
+        "settings": settings.to_dict(),
     }
-    layout = CensusLayout(param, vals, start_arr, settings["max_points"], system.state_names)
+    layout = CensusLayout(
+        param, vals, start_arr, settings.max_points, system.state_names, stop == "converged"
+    )
     y0 = system.initial_state(None)
     n_v, n_s = len(vals), len(start_arr)
-    runner = _local_runner()
+    runner = run_local
     if backend == "dask":
         from .backends import dask_runner
 
@@ -770,13 +741,13 @@ def census(
             out, identity_tol=identity_tol, track_threshold=track_threshold, _write=True
         )
     labels, attractors, tracks = classify_census(
-        vals, mem, period_tol=settings["period_tol"], identity_tol=identity_tol,
+        vals, mem, period_tol=settings.period_tol, identity_tol=identity_tol,
         track_threshold=track_threshold,
     )  # fmt: skip
     return CensusResult(
         param=param, values=vals, starts=start_arr, labels=labels, status_code=mem["status"],
         period=mem["period"], attractors=attractors, tracks=tracks,
-        state_names=system.state_names, system=system, settings=_settings_dict(settings),
+        state_names=system.state_names, system=system, settings=settings.to_dict(),
         raw=mem,
     )  # fmt: skip
 

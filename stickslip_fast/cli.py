@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from .config import ConfigError, RunConfig, load_config, parse_config
-from .system import PRESETS
+from .system import DRIVES, PRESETS
+from .trajectory import METHODS
 
 __all__ = ["main"]
 
@@ -66,12 +67,12 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("config", nargs="?", help="TOML configuration file (see docs/configs.md)")
     p.add_argument("--preset", choices=sorted(PRESETS), help="parameter set (default: asymmetric)")
     p.add_argument("--eta", type=float, help="static/kinetic friction ratio eta in [1, 10]")
-    p.add_argument("--drive", choices=["constant", "dc-motor"])
+    p.add_argument("--drive", choices=DRIVES)
     p.add_argument("--n-oscillators", dest="n_oscillators", type=int)
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a System field")
     p.add_argument("--t-end", dest="t_end", type=float)
     p.add_argument("--t-transient", dest="t_transient", type=float)
-    p.add_argument("--method", choices=["rodas5p", "dopri5", "dopri5-fixed"])
+    p.add_argument("--method", choices=METHODS)
     p.add_argument("--rtol", type=float)
     p.add_argument("--atol", type=float)
     p.add_argument("--h", type=float, help="fixed step (dopri5-fixed)")
@@ -91,7 +92,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.json:
         out = {
             "system": cfg.system.to_dict(),
-            "settings": res.settings,
+            "settings": res.settings.to_dict(),
             "status": res.status,
             "period": res.period,
             "n_steps": res.n_steps,
@@ -149,7 +150,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
         chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
         progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
-        n_workers=args.workers, title=cfg.title, notes=cfg.notes, **integ,
+        n_workers=args.workers, title=cfg.title, notes=cfg.notes,
+        analyses=sw.get("analyses", ()), **integ,
     )  # fmt: skip
     if not args.quiet:
         print(_report(res.path) if res.path is not None else repr(res))
@@ -164,6 +166,13 @@ def _cmd_census(args: argparse.Namespace) -> int:
         raise ConfigError(f"{cfg.source}: a census needs a [census] section with param and values")
     c = dict(cfg.census)
     integ = dict(cfg.integration)
+    if "stop" in integ:  # [integration].stop applies unless [census].stop says otherwise
+        if "stop" in c and c["stop"] != integ["stop"]:
+            raise ConfigError(
+                f"{cfg.source}: [integration].stop = {integ['stop']!r} and [census].stop = "
+                f"{c['stop']!r} disagree; give one"
+            )
+        c["stop"] = integ.pop("stop")
     backend = "dask" if (args.scheduler or args.workers) else "local"
     census(
         cfg.system, c.pop("param"), c.pop("values"), out=args.output, threads=args.threads,
@@ -229,39 +238,31 @@ def _census_report(path) -> str:
 
 def _report(path) -> str:
     """A text summary of a result file: configuration, progress, periods, statuses."""
-    import h5py
-
+    from .io import sweep_summary
     from .poincare import STATUS_NAMES
 
-    lines = []
-    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
-        cfg = json.loads(h5.attrs["config"])
-        names = cfg["param"]
-        done = h5["done"][...].astype(bool)
-        status = h5["status"][...]
-        period = h5["period"][...]
-        lines.append(f"file:      {path}")
-        if h5.attrs.get("title"):
-            lines.append(f"title:     {h5.attrs['title']}")
-        lines.append(
-            f"package:   stickslip_fast {h5.attrs.get('package_version', '?')}, "
-            f"schema {h5.attrs.get('schema_version')}, created {h5.attrs.get('created', '?')}"
-        )
-        sysd = {k: v for k, v in cfg["system"].items() if v is not None}
-        lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
-        axes = []
-        for name in names:
-            a = h5[name][...]
-            axes.append(f"{name} in [{a.min():g}, {a.max():g}] ({a.size} values)")
-        lines.append("sweep:     " + " x ".join(axes) + f", mode {cfg['mode']}")
-        st = cfg["settings"]
-        lines.append(
-            f"settings:  method={st['method']} rtol={st['rtol']:g} atol={st['atol']:g} "
-            f"t_end={st['t_end']:g} t_transient={st['t_transient']:g} max_points={st['max_points']}"
-        )
-        lines.append(
-            f"progress:  {int(done.sum())} of {done.size} values done ({100 * done.mean():.1f}%)"
-        )
+    info = sweep_summary(path)
+    cfg, attrs = info["config"], info["attrs"]
+    done, status, period = info["done"], info["status"], info["period"]
+    lines = [f"file:      {path}"]
+    if attrs.get("title"):
+        lines.append(f"title:     {attrs['title']}")
+    lines.append(
+        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
+        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
+    )
+    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
+    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    axes = [f"{n} in [{a.min():g}, {a.max():g}] ({a.size} values)" for n, a in info["axes"].items()]
+    lines.append("sweep:     " + " x ".join(axes) + f", mode {cfg['mode']}")
+    st = cfg["settings"]
+    lines.append(
+        f"settings:  method={st['method']} rtol={st['rtol']:g} atol={st['atol']:g} "
+        f"t_end={st['t_end']:g} t_transient={st['t_transient']:g} max_points={st['max_points']}"
+    )
+    lines.append(
+        f"progress:  {int(done.sum())} of {done.size} values done ({100 * done.mean():.1f}%)"
+    )
     if done.any():
         codes, counts = np.unique(status[done], return_counts=True)
         lines.append(
@@ -281,14 +282,21 @@ def _cmd_info(args: argparse.Namespace) -> int:
     try:
         with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
             kind = h5.attrs.get("kind")
-        print(_census_report(args.file) if kind == "census" else _report(args.file))
+            config = h5.attrs.get("config")
+        if kind == "census":
+            print(_census_report(args.file))
+            if args.json:
+                print(json.dumps(json.loads(config), indent=1))
+            return 0
+        print(_report(args.file))
     except (OSError, KeyError) as exc:
         raise ValueError(
             f"{args.file}: not a readable stickslip_fast result file ({exc})"
         ) from None
     if args.json:
-        with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
-            print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+        from .io import sweep_summary
+
+        print(json.dumps(sweep_summary(args.file)["config"], indent=1))
     return 0
 
 

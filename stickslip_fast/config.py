@@ -33,6 +33,7 @@ Layout (every section optional except what the command needs)::
     values = { start = 1.0, stop = 10.0, num = 1000 }   # or a list; 2-D: a list of two
     mode = "restart"                               # restart | continuation | continuation-both
     chunk_size = 64
+    analyses = ["sync"]                            # extra per-value results (io.ANALYSES)
 
     [census]              # stickslip-fast census: every start at every value
     param = "eta"
@@ -49,6 +50,7 @@ Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,6 +58,7 @@ from typing import Any
 
 import numpy as np
 
+from .settings import Settings
 from .system import System
 
 if sys.version_info >= (3, 11):
@@ -65,17 +68,22 @@ else:  # pragma: no cover
 
 __all__ = ["ConfigError", "RunConfig", "load_config", "parse_config", "paper_order_to_state"]
 
+#: [integration] keys: the fields of Settings, with their declared types.
+_SETTING_TYPES = {f.name: str(f.type) for f in dataclasses.fields(Settings)}
+_TOML_TYPES = {
+    "float": ("a number", (int, float)),
+    "int": ("an integer", int),
+    "str": ("a string", str),
+}
+
 _SECTIONS = {
     "title": None,
     "notes": None,
     "system": None,  # keys checked by System
     "initial": {"y0", "y0_paper", "vb"},
-    "integration": {
-        "t_end", "t_transient", "method", "rtol", "atol", "h", "max_points", "max_steps",
-        "equilibrium_tol", "period_tol",
-    },
+    "integration": set(_SETTING_TYPES),  # every field of Settings
     "simulate": {"sample_dt"},
-    "sweep": {"param", "values", "mode", "chunk_size"},
+    "sweep": {"param", "values", "mode", "chunk_size", "analyses"},
     "census": {
         "param", "values", "n_starts", "seed", "include_zero", "box", "starts", "stop",
         "chunk_size", "identity_tol", "track_threshold",
@@ -133,11 +141,22 @@ def _values_from_spec(spec: Any, key: str) -> np.ndarray:
             raise ConfigError(f"{key}.num must be an integer >= 1, got {num!r}")
         return np.linspace(float(spec["start"]), float(spec["stop"]), num)
     if isinstance(spec, list) and spec:
-        try:
-            return np.asarray(spec, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"{key} must hold numbers: {exc}") from None
+        for i, v in enumerate(spec):  # no "3.0" -> 3.0 or true -> 1.0 conversions
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ConfigError(f"{key} must hold numbers, but {key}[{i}] is {v!r}")
+        return np.asarray(spec, dtype=float)
     raise ConfigError(f"{key} must be a non-empty list or {{start, stop, num}}, got {spec!r}")
+
+
+def _analyses(value: Any) -> tuple[str, ...]:
+    from .io import ANALYSES
+
+    if not isinstance(value, list) or not all(isinstance(a, str) for a in value):
+        raise ConfigError(f"[sweep].analyses must be a list of names, got {value!r}")
+    unknown = [a for a in value if a not in ANALYSES]
+    if unknown:
+        raise ConfigError(f"[sweep].analyses: unknown {unknown}; choose from {sorted(ANALYSES)}")
+    return tuple(value)
 
 
 def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
@@ -187,15 +206,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
 
     integration = dict(data.get("integration", {}))
     for key, value in integration.items():
-        want_int = key in ("max_points", "max_steps")
-        if key == "method":
-            ok = isinstance(value, str)
-        else:
-            ok = not isinstance(value, bool) and isinstance(
-                value, int if want_int else (int, float)
-            )
-        if not ok:
-            kind = "a string" if key == "method" else "an integer" if want_int else "a number"
+        kind, types = _TOML_TYPES[_SETTING_TYPES[key]]
+        if isinstance(value, bool) or not isinstance(value, types):
             raise ConfigError(f"[integration].{key} must be {kind}, got {value!r}")
 
     sample_dt = data.get("simulate", {}).get("sample_dt")
@@ -238,6 +250,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
             if isinstance(cs, bool) or not isinstance(cs, int) or cs < 1:
                 raise ConfigError(f"[sweep].chunk_size must be an integer >= 1, got {cs!r}")
             sweep["chunk_size"] = cs
+        if "analyses" in sw:
+            sweep["analyses"] = _analyses(sw["analyses"])
 
     census = _parse_census(data["census"]) if "census" in data else None
 

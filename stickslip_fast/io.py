@@ -75,6 +75,10 @@ __all__ = [
     "SCHEMA_VERSION",
     "ConfigMismatchError",
     "SweepFile",
+    "SweepLayout",
+    "MemoryStore",
+    "read_dataset",
+    "sweep_summary",
     "config_digest",
     "read_sweep",
     "PER_VALUE_FIELDS",
@@ -113,6 +117,8 @@ _DESCRIPTIONS = {
     "Poincare points (analysis.sync_error); 0 for N = 1, NaN without points",
     "lyapunov": "Largest Lyapunov exponent, plain Benettin average over [t_transient, t_end] "
     "(analysis.largest_lyapunov)",
+    "t_converged": "Converged stopping: time at which the run was found converged (its "
+    "points repeat, or it has been at rest for the dwell time); NaN if it reached t_end first",
     "lyapunov_fit": "Largest Lyapunov exponent, least-squares slope of the cumulative log "
     "growth (analysis.largest_lyapunov exponent_fit)",
     "points": "Full state at each local minimum of x1 (upward zero crossing of dx1), "
@@ -172,11 +178,14 @@ class SweepLayout:
     max_points: int
     state_names: list[str]
     analyses: tuple[str, ...] = ()
+    #: converged stopping: the file has a ``t_converged`` dataset
+    converged: bool = False
 
     @property
     def analysis_fields(self) -> tuple[str, ...]:
-        """The optional analysis datasets of this file."""
-        return tuple(f for a in self.analyses for f in ANALYSES[a])
+        """The optional float datasets of this file (analyses, ``t_converged``)."""
+        fields = tuple(f for a in self.analyses for f in ANALYSES[a])
+        return fields + (("t_converged",) if self.converged else ())
 
     @property
     def grid_shape(self) -> tuple[int, ...]:
@@ -185,6 +194,69 @@ class SweepLayout:
     @property
     def grid_dims(self) -> tuple[str, ...]:
         return (("branch",) if self.branches else ()) + self.param_names
+
+    @property
+    def result_fields(self) -> tuple[str, ...]:
+        """The per-value datasets a computed block holds (all but ``done``)."""
+        return ("points", "t_points", "final_state", *PER_VALUE_FIELDS, *self.analysis_fields)
+
+    def dataset_specs(self) -> dict[str, tuple[tuple[int, ...], str, tuple[str, ...], Any]]:
+        """Every per-value dataset: name -> (shape, dtype, dimension names, fill value).
+
+        The one description of the result arrays, used by the HDF5 file and by
+        the in-memory :class:`MemoryStore` alike.
+        """
+        grid = self.grid_shape
+        gdims = self.grid_dims
+        n_state = len(self.state_names)
+        kp = self.max_points
+        specs = {
+            "points": (grid + (kp, n_state), "f8", gdims + ("point", "state"), np.nan),
+            "t_points": (grid + (kp,), "f8", gdims + ("point",), np.nan),
+            "final_state": (grid + (n_state,), "f8", gdims + ("state",), np.nan),
+            "done": (grid, "u1", gdims, 0),
+        }
+        for name, dtype in PER_VALUE_FIELDS.items():
+            specs[name] = (grid, dtype, gdims, -1 if name == "status" else 0)
+        for name in self.analysis_fields:
+            specs[name] = (grid, "f8", gdims, np.nan)
+        return specs
+
+
+class MemoryStore:
+    """The in-memory twin of :class:`SweepFile`: the same arrays and methods, no file.
+
+    Used by :func:`~stickslip_fast.sweep` when it is given no output path;
+    :attr:`data` holds every dataset of :meth:`SweepLayout.dataset_specs`.
+    """
+
+    def __init__(self, layout: SweepLayout):
+        self.layout = layout
+        self.data = {
+            name: np.full(shape, fill, dtype=dtype)
+            for name, (shape, dtype, _, fill) in layout.dataset_specs().items()
+        }
+
+    def done_mask(self) -> np.ndarray:
+        return self.data["done"].astype(bool)
+
+    def final_state_at(self, index: tuple) -> np.ndarray:
+        return self.data["final_state"][index]
+
+    def write(self, index: tuple, data: dict[str, np.ndarray]) -> None:
+        """Store one block of values at grid ``index``, as :meth:`SweepFile.write`."""
+        for name in self.layout.result_fields:
+            self.data[name][index] = data[name]
+        self.data["done"][index] = 1
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> MemoryStore:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 class SweepFile:
@@ -321,22 +393,10 @@ class SweepFile:
         scales["state"] = d
 
         grid = layout.grid_shape
-        gdims = layout.grid_dims
-        n_state = len(layout.state_names)
         kp = layout.max_points
         # chunk along the value axes so appending a sweep chunk touches few HDF5 chunks
         vchunk = tuple(min(s, 64) for s in grid)
-        specs = {
-            "points": (grid + (kp, n_state), "f8", gdims + ("point", "state"), np.nan),
-            "t_points": (grid + (kp,), "f8", gdims + ("point",), np.nan),
-            "final_state": (grid + (n_state,), "f8", gdims + ("state",), np.nan),
-            "done": (grid, "u1", gdims, 0),
-        }
-        for name, dtype in PER_VALUE_FIELDS.items():
-            specs[name] = (grid, dtype, gdims, -1 if name == "status" else 0)
-        for name in layout.analysis_fields:
-            specs[name] = (grid, "f8", gdims, np.nan)
-        for name, (shape, dtype, dims, fill) in specs.items():
+        for name, (shape, dtype, dims, fill) in layout.dataset_specs().items():
             chunks = vchunk + tuple(min(s, 256) for s in shape[len(grid) :])
             if kp == 0 and name in ("points", "t_points"):
                 chunks = None
@@ -366,9 +426,7 @@ class SweepFile:
         ``data`` holds points, t_points, final_state and the PER_VALUE_FIELDS,
         each with the block's value axes first. ``done`` is set last.
         """
-        for name in ("points", "t_points", "final_state", *PER_VALUE_FIELDS):
-            self.h5[name][index] = data[name]
-        for name in self.layout.analysis_fields:
+        for name in self.layout.result_fields:
             self.h5[name][index] = data[name]
         self.h5.flush()
         self.h5["done"][index] = 1
@@ -459,10 +517,46 @@ def _rebuild(path: Path, slab: int = 4096) -> None:
     tmp.replace(path)
 
 
+def _open_read(path: str | Path) -> h5py.File:
+    """Open a result file for reading (also while a sweep is appending to it)."""
+    return h5py.File(path, "r", libver="latest", swmr=True)
+
+
+def read_dataset(path: str | Path, name: str) -> np.ndarray:
+    """One whole dataset of a result file (KeyError naming the file if it has none)."""
+    with _open_read(path) as h5:
+        if name not in h5:
+            raise KeyError(f"{path} has no {name!r} dataset")
+        return h5[name][...]
+
+
+def sweep_summary(path: str | Path) -> dict[str, Any]:
+    """What ``stickslip-fast info`` shows of a sweep file, read in one go.
+
+    Returns
+    -------
+    dict
+        ``config`` (parsed), ``attrs`` (the root attributes ``title``,
+        ``package_version``, ``schema_version``, ``created`` where present),
+        ``axes`` (name -> values), ``done`` (bool), ``status`` and ``period``.
+    """
+    with _open_read(path) as h5:
+        config = json.loads(h5.attrs["config"])
+        keys = ("title", "package_version", "schema_version", "created")
+        return {
+            "config": config,
+            "attrs": {k: h5.attrs[k] for k in keys if k in h5.attrs},
+            "axes": {name: h5[name][...] for name in config["param"]},
+            "done": h5["done"][...].astype(bool),
+            "status": h5["status"][...],
+            "period": h5["period"][...],
+        }
+
+
 def read_sweep(path: str | Path) -> dict[str, Any]:
     """Read a whole sweep file into memory: arrays, coordinates and configuration."""
     out: dict[str, Any] = {}
-    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+    with _open_read(path) as h5:
         if h5.attrs.get("schema_version") != SCHEMA_VERSION:
             raise ValueError(f"{path}: not a stickslip_fast sweep file (schema_version missing)")
         out["config"] = json.loads(h5.attrs["config"])
@@ -474,7 +568,9 @@ def read_sweep(path: str | Path) -> dict[str, Any]:
         out["state_names"] = [s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]]
         for name in ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS):
             out[name] = h5[name][...]
-        out["analyses"] = {name: h5[name][...] for name in ANALYSIS_FIELDS if name in h5}
+        out["analyses"] = {
+            name: h5[name][...] for name in (*ANALYSIS_FIELDS, "t_converged") if name in h5
+        }
     return out
 
 
@@ -524,7 +620,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
     system = result.system
     cfg: dict[str, Any] = {
         "system": system.to_dict(),
-        "settings": dict(result.settings),
+        "settings": result.settings.to_dict(),
         "method": result.method,
     }
     title = notes = ""
@@ -627,6 +723,7 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
     ValueError
         If the file is not a trajectory file of this schema.
     """
+    from .settings import Settings
     from .simulate import SimulationResult
     from .system import System
 
@@ -654,7 +751,7 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
         amplitude=float(attrs["amplitude"]),
         t=data["t"],
         y=data["y"],
-        settings=config["settings"],
+        settings=Settings.from_dict(config["settings"]),
     )
     return {
         **data,
@@ -687,6 +784,7 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
 #     /count, /period, /status, /n_steps, /n_rejected, /n_crossings  (P, start)
 #     /final_state    (P, start, state)
 #     /done           (P, start)   1 once the run is written (resume uses it)
+#     /t_converged    (P, start)   f8, only with stop="converged" (NaN: never converged)
 #     /label          (P, start)   i4: track id of the attractor reached; -1 failed or no
 #                                  crossings; -2 not classified yet
 #     /attractors     group (one row per attractor per value; open with group="attractors")
@@ -713,6 +811,7 @@ class CensusLayout:
     starts: np.ndarray
     max_points: int
     state_names: list[str]
+    converged: bool = False  # stop="converged": also a t_converged dataset
 
     @property
     def grid_shape(self) -> tuple[int, int]:
@@ -739,6 +838,8 @@ class CensusFile(SweepFile):
         }
         for k, v in CENSUS_RUN_FIELDS.items():
             out[k] = np.full(grid, -1 if k == "status" else 0, dtype=v)
+        if layout.converged:
+            out["t_converged"] = np.full(grid, np.nan)
         return out
 
     @staticmethod
@@ -797,7 +898,12 @@ class CensusFile(SweepFile):
         }
         for name, dtype in CENSUS_RUN_FIELDS.items():
             specs[name] = (grid, dtype, gdims, -1 if name == "status" else 0)
+        if layout.converged:
+            specs["t_converged"] = (grid, "f8", gdims, np.nan)
         descriptions = dict(_DESCRIPTIONS)
+        descriptions["t_converged"] = (
+            "stop='converged': time at which the run was found converged (NaN: never)"
+        )
         descriptions["label"] = (
             "Track id of the attractor each run reached; -1: failed or no crossings; "
             "-2: not classified yet"
@@ -830,7 +936,10 @@ class CensusFile(SweepFile):
             if j == len(flat) or vi[j] != vi[a] or si[j] != si[j - 1] + 1:
                 runs.append((int(vi[a]), slice(int(si[a]), int(si[j - 1]) + 1), slice(a, j)))
                 a = j
-        for name in ("points", "final_state", *CENSUS_RUN_FIELDS):
+        names = ["points", "final_state", *CENSUS_RUN_FIELDS]
+        if "t_converged" in self.h5:
+            names.append("t_converged")
+        for name in names:
             ds = self.h5[name]
             for v, s, part in runs:
                 ds[v, s] = data[name][part]
@@ -855,6 +964,8 @@ def read_census(path: str | Path) -> dict[str, Any]:
         out["state_names"] = [s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]]
         for name in ("points", "final_state", "done", "label", *CENSUS_RUN_FIELDS):
             out[name] = h5[name][...]
+        if "t_converged" in h5:
+            out["t_converged"] = h5["t_converged"][...]
     return out
 
 

@@ -11,7 +11,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-_JIT = dict(cache=True, nogil=True)
+# error_model="numpy": a division by zero gives inf/nan (caught by the callers'
+# finiteness checks) instead of raising inside compiled, possibly parallel, code.
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 
 @njit(**_JIT)
@@ -93,15 +95,14 @@ def w_factor(
     if not dc:
         return 1.0
     schur = sigma - corner
-    tmp = np.empty(4)
     for i in range(n_osc):
+        zi = z[i]
         for r in range(4):
-            tmp[r] = -border_col[i, r]
-        _lu4_solve(lu[i], piv[i], tmp, 0)
+            zi[r] = -border_col[i, r]
+        _lu4_solve(lu[i], piv[i], zi, 0)
         for r in range(4):
-            z[i, r] = tmp[r]
             # W's border row is -border_row
-            schur += border_row[i, r] * tmp[r]
+            schur += border_row[i, r] * zi[r]
     if schur == 0.0:
         return np.nan
     return schur
@@ -132,3 +133,92 @@ def w_solve(
             for r in range(4):
                 b[4 * i + r] -= z[i, r] * xv
         b[n] = xv
+
+
+@njit(**_JIT)
+def bordered_matvec(
+    blocks: np.ndarray,
+    border_col: np.ndarray,
+    border_row: np.ndarray,
+    corner: float,
+    n_osc: int,
+    dc: bool,
+    u: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """out = J u for J in bordered block-diagonal form (see :func:`model.jacobian_blocks`)."""
+    nb = 4 * n_osc
+    uvb = u[nb] if dc else 0.0
+    acc = 0.0
+    for i in range(n_osc):
+        j = 4 * i
+        b = blocks[i]
+        for r in range(4):
+            out[j + r] = (
+                b[r, 0] * u[j] + b[r, 1] * u[j + 1] + b[r, 2] * u[j + 2] + b[r, 3] * u[j + 3]
+            )
+        if dc:
+            for r in range(4):
+                out[j + r] += border_col[i, r] * uvb
+                acc += border_row[i, r] * u[j + r]
+    if dc:
+        out[nb] = acc + corner * uvb
+
+
+# ------------------------------------------------------------- dense (test problems)
+@njit(**_JIT)
+def dense_w_factor(sigma: float, jac: np.ndarray, lu: np.ndarray, piv: np.ndarray) -> bool:
+    """Factor W = sigma I - J (dense, n x n) in place into ``lu``; False if singular.
+
+    For small test problems (:mod:`stickslip_fast.testproblems`); the model uses
+    the bordered O(N) factorisation above.
+    """
+    n = jac.shape[0]
+    for r in range(n):
+        for q in range(n):
+            lu[r, q] = -jac[r, q]
+        lu[r, r] += sigma
+    for k in range(n):
+        p = k
+        big = abs(lu[k, k])
+        for r in range(k + 1, n):
+            if abs(lu[r, k]) > big:
+                big = abs(lu[r, k])
+                p = r
+        piv[k] = p
+        if not big > 0.0:
+            return False
+        if p != k:
+            for q in range(n):
+                tmp = lu[k, q]
+                lu[k, q] = lu[p, q]
+                lu[p, q] = tmp
+        inv = 1.0 / lu[k, k]
+        for r in range(k + 1, n):
+            lu[r, k] *= inv
+            f = lu[r, k]
+            for q in range(k + 1, n):
+                lu[r, q] -= f * lu[k, q]
+    return True
+
+
+@njit(**_JIT)
+def dense_w_solve(lu: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
+    """Solve W x = b in place with the factors from :func:`dense_w_factor`."""
+    n = lu.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for k in range(n):
+        s = b[k]
+        for q in range(k):
+            s -= lu[k, q] * b[q]
+        b[k] = s
+    for k in range(n - 1, -1, -1):
+        s = b[k]
+        for q in range(k + 1, n):
+            s -= lu[k, q] * b[q]
+        b[k] = s / lu[k, k]

@@ -1,6 +1,8 @@
 """The paper's model: smooth Contensou-Pade friction, right-hand side, analytic Jacobian.
 
-This module is the single source of the equations; every integrator calls it.
+This module is the single source of the equations: the right-hand side, its
+Jacobian and its second derivative. Every problem (:mod:`stickslip_fast.problems`)
+and every kernel calls it.
 
 State layout (see :attr:`System.state_names`): disk i occupies slots
 ``4 i .. 4 i + 3`` as (x_i, dx_i, phi_i, dphi_i); the DC motor's belt speed v_b
@@ -22,9 +24,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .system import (
-    ETA_MAX,
-    ETA_MIN,
+from .linalg import bordered_matvec
+from .params import (
     P_BETA,
     P_C,
     P_C12,
@@ -36,6 +37,7 @@ from .system import (
     P_TB,
     P_VB,
     P_VB0,
+    eta_prime,
 )
 
 __all__ = [
@@ -45,25 +47,15 @@ __all__ = [
     "friction_second_partials",
     "rhs",
     "jacobian_blocks",
+    "jacobian_vector",
+    "second_derivative_form",
+    "tangent_rhs",
     "dense_jacobian",
 ]
 
-_JIT = dict(cache=True, nogil=True)
-
-
-@njit(**_JIT)
-def eta_prime(eta: float) -> float:
-    """The paper's cubic fit eta'(eta) on [1, 1.3], [1.3, 2.7], [2.7, 10].
-
-    Returns NaN outside [1, 10]: the fit is not extrapolated (System rejects such eta).
-    """
-    if eta < ETA_MIN or eta > ETA_MAX or not math.isfinite(eta):
-        return math.nan
-    if eta <= 1.3:
-        return -13.607 + eta * (30.893 + eta * (-22.01 + eta * 5.878))
-    if eta <= 2.7:
-        return -2.41 + eta * (3.985 + eta * (-0.3581 + eta * 0.0493))
-    return -1.684 + eta * (3.121 + eta * (-0.00483 + eta * 0.000196))
+# error_model="numpy": a division by zero gives inf/nan instead of raising, so no
+# parameter value can make compiled (possibly parallel) code raise.
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 
 @njit(**_JIT)
@@ -223,6 +215,90 @@ def jacobian_blocks(
             border_row[i, 3] = bn * t_w
             corner -= bn * t_v
     return corner
+
+
+@njit(**_JIT)
+def jacobian_vector(
+    y: np.ndarray,
+    u: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    blocks: np.ndarray,
+    border_col: np.ndarray,
+    border_row: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Write J(y) u into ``out``, with J from :func:`jacobian_blocks`.
+
+    ``blocks``, ``border_col`` and ``border_row`` are scratch arrays of the
+    shapes :func:`jacobian_blocks` fills; they hold J(y) on return.
+    """
+    corner = jacobian_blocks(y, p, n_osc, dc, blocks, border_col, border_row)
+    bordered_matvec(blocks, border_col, border_row, corner, n_osc, dc, u, out)
+
+
+@njit(**_JIT)
+def second_derivative_form(
+    y: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    out: np.ndarray,
+) -> None:
+    """Write the symmetric bilinear form D^2 f(y)[u, v] into ``out``.
+
+    This is H(y, u) v = d/ds [J(y + s v) u] at s = 0, the lower-left block of the
+    Jacobian of the variational system. Only the friction terms are nonlinear,
+    so only the dx, dphi (and v_b) rows are nonzero.
+    """
+    mu = p[P_MU]
+    eps = p[P_EPS]
+    etap = p[P_ETAP]
+    inv_m = 1.0 / p[P_M]
+    vb = y[4 * n_osc] if dc else p[P_VB]
+    uvb = u[4 * n_osc] if dc else 0.0
+    vvb = v[4 * n_osc] if dc else 0.0
+    acc = 0.0
+    for i in range(n_osc):
+        j = 4 * i
+        t_vv, t_vw, t_ww, m_vv, m_vw, m_ww = friction_second_partials(
+            y[j + 1] - vb, y[j + 3], eps, etap
+        )
+        a1 = u[j + 1] - uvb
+        b1 = u[j + 3]
+        a2 = v[j + 1] - vvb
+        b2 = v[j + 3]
+        cross = a1 * b2 + b1 * a2
+        d2t = t_vv * a1 * a2 + t_vw * cross + t_ww * b1 * b2
+        d2m = m_vv * a1 * a2 + m_vw * cross + m_ww * b1 * b2
+        out[j] = 0.0
+        out[j + 1] = -mu * d2t
+        out[j + 2] = 0.0
+        out[j + 3] = -mu * d2m * inv_m
+        acc += d2t
+    if dc:
+        out[4 * n_osc] = p[P_BETA] / n_osc * acc / p[P_TB]
+
+
+@njit(**_JIT)
+def tangent_rhs(
+    y: np.ndarray,
+    u: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    dydt: np.ndarray,
+    dudt: np.ndarray,
+) -> None:
+    """Write f(y) into ``dydt`` and J(y) u into ``dudt`` (allocates scratch; for tests)."""
+    rhs(y, p, n_osc, dc, dydt)
+    blocks = np.empty((n_osc, 4, 4))
+    col = np.zeros((n_osc, 4))
+    row = np.zeros((n_osc, 4))
+    jacobian_vector(y, u, p, n_osc, dc, blocks, col, row, dudt)
 
 
 @njit(**_JIT)

@@ -1,7 +1,7 @@
 """Poincare section at the local minima of x_1, period detection, run classification.
 
-The section is dx_1 = 0 crossed upwards. The crossing inside an accepted step
-is located by Illinois regula falsi on the step's dense output, to round-off.
+The section is dx_1 = 0 crossed upwards; the crossing inside an accepted step is
+located on the step's dense output by :func:`driver.locate_crossing`.
 
 Equilibria (steady sliding, a stalled motor) make dx_1 flicker around zero at
 round-off level and would produce spurious "period-1" points; runs are
@@ -14,69 +14,23 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .integrators import dense_value
-
-_JIT = dict(cache=True, nogil=True)
-
-STATUS_NAMES = (
-    "ok",
-    "equilibrium",
-    "stalled",
-    "no-crossings",
-    "nonfinite",
-    "step-underflow",
-    "max-steps",
+from .status import (  # noqa: F401  (re-exported: the codes used to live here)
+    ORBIT_STATUSES,
+    ST_EQUILIBRIUM,
+    ST_MAX_STEPS,
+    ST_NO_CROSSINGS,
+    ST_NONFINITE,
+    ST_OK,
+    ST_STALLED,
+    ST_UNDERFLOW,
+    STATUS_NAMES,
 )
-ST_OK, ST_EQUILIBRIUM, ST_STALLED, ST_NO_CROSSINGS, ST_NONFINITE, ST_UNDERFLOW, ST_MAX_STEPS = (
-    range(7)
-)
-#: Statuses for which a run has an orbit to report.
-ORBIT_STATUSES = ("ok",)
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 #: A DC-motor equilibrium counts as "stalled" when the belt runs slower than
 #: this fraction of its no-load speed v_b0.
 STALL_FRACTION = 0.01
-
-
-@njit(**_JIT)
-def locate_upcrossing(kind: int, y0, y1, D, comp: int) -> float:
-    """theta in [0, 1] where component ``comp`` of the dense output crosses 0.
-
-    Requires y0[comp] < 0 <= y1[comp]. Illinois method: superlinear, bracketing,
-    stops when the bracket no longer shrinks in floating point.
-    """
-    a = 0.0
-    fa = y0[comp]
-    b = 1.0
-    fb = y1[comp]
-    if fb == 0.0:
-        return 1.0
-    side = 0
-    theta = 1.0
-    for _ in range(200):
-        theta = (a * fb - b * fa) / (fb - fa)
-        if not (a < theta < b):
-            theta = 0.5 * (a + b)
-            if not (a < theta < b):
-                break
-        f = dense_value(kind, theta, y0, y1, D, comp)
-        if f == 0.0:
-            return theta
-        if f < 0.0:
-            a = theta
-            fa = f
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = theta
-            fb = f
-            if side == 1:
-                fa *= 0.5
-            side = 1
-        if b - a <= 4e-16:
-            break
-    return theta
 
 
 @njit(**_JIT)
@@ -160,3 +114,46 @@ def classify(
     if n_crossings == 0:
         return ST_NO_CROSSINGS
     return ST_OK
+
+
+@njit(**_JIT)
+def ring_period(
+    pts: np.ndarray, count: int, tol: float, max_period: int, min_repeats: int, min_points: int
+) -> int:
+    """Smallest p <= max_period with which the last points of a ring buffer repeat.
+
+    ``pts`` is a ring buffer holding the most recent of ``count`` points (point
+    j in slot j % capacity). Period p is accepted when each of the last
+    m = max(min_points, min_repeats * p) points lies within ``tol`` (max norm,
+    scaled by 1 + the largest |coordinate| of the points compared) of the point
+    p before it, so the m + p most recent points must be in the buffer. Returns
+    0 if no such p exists. Used by converged stopping.
+    """
+    cap = pts.shape[0]
+    avail = min(count, cap)
+    n = pts.shape[1]
+    for per in range(1, max_period + 1):
+        m = max(min_points, min_repeats * per)
+        if m + per > avail:
+            break
+        scale = 0.0
+        for j in range(count - m - per, count):
+            row = pts[j % cap]
+            for i in range(n):
+                v = abs(row[i])
+                if v > scale:
+                    scale = v
+        thr = tol * (1.0 + scale)
+        good = True
+        for j in range(count - m, count):
+            a = pts[j % cap]
+            b = pts[(j - per) % cap]
+            for i in range(n):
+                if not abs(a[i] - b[i]) <= thr:
+                    good = False
+                    break
+            if not good:
+                break
+        if good:
+            return per
+    return 0

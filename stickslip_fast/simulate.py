@@ -3,14 +3,27 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
+from .interrupt import call_interruptible, new_abort_flag
 from .poincare import STATUS_NAMES, detect_period
+from .settings import (
+    DEFAULT_ATOL,
+    DEFAULT_EQUILIBRIUM_TOL,
+    DEFAULT_MAX_STEPS,
+    DEFAULT_RTOL,
+    STOP_KINDS,
+    Settings,
+    check_memory,
+    check_real,
+    period_tolerance,
+)
 from .system import System
 from .trajectory import (
     F_AMPLITUDE,
+    F_T_CONVERGED,
     F_T_FINAL,
     I_CROSSINGS,
     I_REJECTED,
@@ -23,31 +36,22 @@ from .trajectory import (
     unroll_ring,
 )
 
-__all__ = ["simulate", "SimulationResult", "DEFAULT_RTOL", "DEFAULT_ATOL", "MAX_PERIOD"]
+__all__ = [
+    "simulate",
+    "SimulationResult",
+    "DEFAULT_RTOL",
+    "DEFAULT_ATOL",
+    "DEFAULT_EQUILIBRIUM_TOL",
+    "DEFAULT_MAX_STEPS",
+    "MAX_PERIOD",
+    "period_tolerance",
+]
 
-#: Default tolerances. Over the seven SciPy reference trajectories (presets,
-#: both drives, N = 1 and 2, 400-3000 time units with their transients) the
-#: Poincare points agree with Radau rtol=1e-10 to 1.8e-7 at worst
-#: (tests/test_scipy_crosscheck.py); rtol=1e-8 would give up to 2e-4 there.
-DEFAULT_RTOL = 1e-9
-DEFAULT_ATOL = 1e-11
 #: Longest period :func:`detect_period` looks for.
 MAX_PERIOD = 64
-#: Period tolerance relative to rtol (see :func:`period_tolerance`).
-PERIOD_TOL_FACTOR = 1e4
-#: Disk speed (over the recording window) below which a run is at rest:
-#: ten times the friction law's smoothing width eps = 1e-5 of the presets.
-DEFAULT_EQUILIBRIUM_TOL = 1e-4
-DEFAULT_MAX_STEPS = 20_000_000
-
-
-def period_tolerance(rtol: float) -> float:
-    """Tolerance for repeated Poincare points: 1e4 rtol, at least 1e-9 (relative).
-
-    Points are accurate to roughly 100 rtol; the extra factor absorbs the last
-    bit of transient decay of orbits whose Floquet multipliers are close to 1.
-    """
-    return max(PERIOD_TOL_FACTOR * rtol, 1e-9)
+#: State-sized work arrays of one compiled run (stages, error estimate, dense
+#: output, Jacobian blocks), an upper bound for the memory estimate.
+WORKSPACE_VECTORS = 64
 
 
 @dataclass
@@ -79,8 +83,13 @@ class SimulationResult:
     amplitude : float
         Distance from rest over the recording window: the largest |dx_i| or
         |dphi_i|, or the range of v_b. At rest when below ``equilibrium_tol``.
+    t_converged : float
+        With ``stop="converged"``: when the run was found converged (NaN if it
+        reached t_end first, and always with ``stop="fixed"``).
     t, y : ndarray or None
         Uniform samples from t_transient every ``sample_dt`` (when requested).
+    settings : Settings
+        The validated integration settings of the run.
     """
 
     system: System
@@ -96,9 +105,10 @@ class SimulationResult:
     t_final: float
     final_state: np.ndarray
     amplitude: float
+    t_converged: float = float("nan")
     t: np.ndarray | None = None
     y: np.ndarray | None = None
-    settings: dict = field(default_factory=dict)
+    settings: Settings | None = None
 
     def column(self, name: str) -> np.ndarray:
         """Poincare coordinate ``name`` (e.g. "x1", "phi1") of every point."""
@@ -109,69 +119,6 @@ class SimulationResult:
             f"SimulationResult(status={self.status!r}, period={self.period}, "
             f"points={len(self.t_poincare)}, n_steps={self.n_steps}, method={self.method!r})"
         )
-
-
-def _check_positive(name: str, value: float, allow_zero: bool = False) -> float:
-    value = float(value)
-    if not math.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
-        raise ValueError(
-            f"{name} must be finite and {'>=' if allow_zero else '>'} 0, got {value!r}"
-        )
-    return value
-
-
-def resolve_settings(
-    method: str,
-    t_end: float,
-    t_transient: float,
-    rtol: float | None,
-    atol: float | None,
-    h: float | None,
-    max_points: int,
-    max_steps: int | None,
-    equilibrium_tol: float,
-    period_tol: float | None,
-) -> dict:
-    """Validate and complete integration settings (shared by simulate and sweep)."""
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    t_end = _check_positive("t_end", t_end)
-    t_transient = _check_positive("t_transient", t_transient, allow_zero=True)
-    if t_transient >= t_end:
-        raise ValueError(f"t_transient ({t_transient}) must be < t_end ({t_end})")
-    rtol = DEFAULT_RTOL if rtol is None else _check_positive("rtol", rtol)
-    atol = DEFAULT_ATOL if atol is None else _check_positive("atol", atol)
-    if method == "dopri5-fixed" and h is None:
-        raise ValueError("method 'dopri5-fixed' needs a step size h")
-    if h is not None:
-        if method == "dopri5":
-            raise ValueError("h is not used by the adaptive 'dopri5'; use 'dopri5-fixed'")
-        h = _check_positive("h", h)
-        steps_needed = math.ceil(t_end / h) + 1
-        max_steps = steps_needed if max_steps is None else int(max_steps)
-    else:
-        h = 0.0
-        max_steps = DEFAULT_MAX_STEPS if max_steps is None else int(max_steps)
-    if max_steps < 1:
-        raise ValueError(f"max_steps must be >= 1, got {max_steps}")
-    if isinstance(max_points, bool) or int(max_points) != max_points or max_points < 0:
-        raise ValueError(f"max_points must be an integer >= 0, got {max_points!r}")
-    equilibrium_tol = _check_positive("equilibrium_tol", equilibrium_tol)
-    period_tol = (
-        period_tolerance(rtol) if period_tol is None else _check_positive("period_tol", period_tol)
-    )
-    return dict(
-        method=method,
-        t_end=t_end,
-        t_transient=t_transient,
-        rtol=rtol,
-        atol=atol,
-        h=h,
-        max_points=int(max_points),
-        max_steps=max_steps,
-        equilibrium_tol=equilibrium_tol,
-        period_tol=period_tol,
-    )
 
 
 def simulate(
@@ -189,6 +136,8 @@ def simulate(
     max_steps: int | None = None,
     equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
     period_tol: float | None = None,
+    stop: str = "fixed",
+    dwell: float | None = None,
 ) -> SimulationResult:
     """Integrate one trajectory and record its Poincare points.
 
@@ -208,12 +157,13 @@ def simulate(
         stiff sticking phases. ``"dopri5"``: adaptive Dormand-Prince 5(4) with PI
         control. ``"dopri5-fixed"``: Dormand-Prince with the fixed step ``h``.
     rtol, atol : float, optional
-        Tolerances of the adaptive methods (defaults 1e-9 and 1e-11).
+        Tolerances of the adaptive methods (defaults 1e-9 and 1e-11; rtol at most 1e-2).
     h : float, optional
         Fixed step size. Required by ``"dopri5-fixed"``; with ``"rodas5p"`` it
         runs the Rosenbrock method with fixed steps (for convergence studies).
     max_points : int
-        Keep at most this many points: the most recent ones.
+        Keep at most this many points: the most recent ones. 0 records none
+        (only the status and final state; the period is then 0, undetected).
     sample_dt : float, optional
         Also return ``t`` and ``y`` on a uniform grid t_transient + k sample_dt.
     max_steps : int, optional
@@ -225,6 +175,18 @@ def simulate(
         the friction law's stick band a "stuck" disk creeps at O(eps).
     period_tol : float, optional
         Relative tolerance of the period detector (default 1e4 rtol).
+    stop : {"fixed", "converged"}
+        ``"fixed"`` (default): run to ``t_end`` and record after ``t_transient``.
+        ``"converged"``: watch the run from t = 0 (``t_transient`` is not used)
+        and end it once it has converged: the Poincare points repeat with a
+        period p <= 64 to ``period_tol`` over at least 3 periods and 8 points,
+        or the disks have been at rest (speeds, and the belt-speed range, below
+        ``equilibrium_tol``) for ``dwell``. An orbit then records max(8, 4 p)
+        more points (at most ``max_points``), which are the ones returned.
+        ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
+    dwell : float, optional
+        Converged stopping: time at rest before a run ends as an equilibrium
+        (default 200, about 15 periods of the slowest free oscillation).
 
     Returns
     -------
@@ -239,49 +201,55 @@ def simulate(
     """
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
-    s = resolve_settings(
+    s = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
-        period_tol,
+        period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
     y_init = system.initial_state(y0)
     n = system.n_state
     if sample_dt is not None:
-        sample_dt = _check_positive("sample_dt", sample_dt)
-        n_samples = int(math.floor((s["t_end"] - s["t_transient"]) / sample_dt + 1e-9)) + 1
+        sample_dt = check_real("sample_dt", sample_dt)
+        n_samples = int(math.floor((s.t_end - s.t_transient) / sample_dt + 1e-9)) + 1
     else:
         n_samples = 0
-    ring = np.empty((s["max_points"], n))
-    tring = np.empty(s["max_points"])
+    check_memory(
+        8 * n * (s.max_points + n_samples + WORKSPACE_VECTORS) + 8 * s.max_points,
+        f"a run with n_oscillators = {system.n_oscillators}, max_points = {s.max_points}"
+        + ("" if sample_dt is None else f" and {n_samples} samples (sample_dt = {sample_dt:g})"),
+    )
+    ring = np.empty((s.max_points, n))
+    tring = np.empty(s.max_points)
     samples = np.empty((n_samples, n))
     stat_i = np.zeros(N_STAT_I, dtype=np.int64)
     stat_f = np.zeros(N_STAT_F)
     y_end = np.empty(n)
-    code = integrate(
-        METHODS.index(s["method"]), y_init, system.to_array(), system.n_oscillators,
-        system.is_dc_motor, s["t_end"], s["t_transient"], s["rtol"], s["atol"], s["h"],
-        s["max_steps"], s["equilibrium_tol"], ring, tring, samples,
+    code = call_interruptible(
+        integrate, METHODS.index(s.method), y_init, system.to_array(), system.n_oscillators,
+        system.is_dc_motor, s.t_end, s.t_transient, s.rtol, s.atol, s.h,
+        s.max_steps, s.equilibrium_tol, ring, tring, samples,
         1.0 if sample_dt is None else sample_dt, y_end, stat_i, stat_f,
+        STOP_KINDS.index(s.stop), s.dwell, s.period_tol, MAX_PERIOD, abort=new_abort_flag(),
     )  # fmt: skip
     status = STATUS_NAMES[code]
     n_cross = int(stat_i[I_CROSSINGS])
-    k = min(n_cross, s["max_points"])
+    k = min(n_cross, s.max_points)
     pts = np.empty((k, n))
     tp = np.empty(k)
     period = 0
     if status == "ok":
         unroll_ring(ring, tring, n_cross, pts, tp)
-        period = int(detect_period(pts, k, s["period_tol"], MAX_PERIOD))
+        period = int(detect_period(pts, k, s.period_tol, MAX_PERIOD))
     else:
         pts = pts[:0]
         tp = tp[:0]
     t = y = None
     if sample_dt is not None:
         m = int(stat_i[I_SAMPLES])
-        t = s["t_transient"] + sample_dt * np.arange(m)
+        t = s.t_transient + sample_dt * np.arange(m)
         y = samples[:m]
     return SimulationResult(
         system=system,
-        method=s["method"],
+        method=s.method,
         state_names=system.state_names,
         t_poincare=tp,
         poincare=pts,
@@ -293,6 +261,7 @@ def simulate(
         t_final=float(stat_f[F_T_FINAL]),
         final_state=y_end,
         amplitude=float(stat_f[F_AMPLITUDE]),
+        t_converged=float(stat_f[F_T_CONVERGED]),
         t=t,
         y=y,
         settings=s,

@@ -1,11 +1,10 @@
 """Parameter sweeps: bifurcation diagrams and 2-D period maps, streamed to HDF5.
 
-The work is cut into *units*. A restart unit is a chunk of independent values;
-a continuation unit is one segment of every unfinished chain (each chain
-follows the values in order, starting from the previous value's final state).
-A unit is computed by a pure function of (system, values, settings) --
-:func:`compute_restart_chunk` or :func:`compute_continuation_chunk` -- so a
-backend can run it anywhere; the driver alone writes the file.
+:func:`sweep` validates its arguments into a :class:`_Plan` (what to compute),
+opens a store for the results (:class:`~stickslip_fast.io.SweepFile`, or its
+in-memory twin :class:`~stickslip_fast.io.MemoryStore`), cuts the work into
+units (:mod:`stickslip_fast.chunks`), hands them to a backend (local, or Dask
+in :mod:`stickslip_fast.backends`) and writes each computed unit to the store.
 """
 
 from __future__ import annotations
@@ -15,186 +14,41 @@ import hashlib
 import sys
 import warnings
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numba
 import numpy as np
 
-from .io import ANALYSES, PER_VALUE_FIELDS, SweepFile, SweepLayout, read_sweep
-from .poincare import ORBIT_STATUSES, STATUS_NAMES
-from .simulate import DEFAULT_EQUILIBRIUM_TOL, MAX_PERIOD, resolve_settings
-from .system import PARAM_INDEX, SWEEPABLE, System
-from .trajectory import METHODS, SWEEP_INT_FIELDS, continuation_chunk, sweep_chunk
+from .chunks import (
+    WorkUnit,
+    compute_continuation_chunk,
+    compute_restart_chunk,
+    continuation_units,
+    restart_units,
+    run_local,
+    unit_starts,
+    write_unit,
+)
+from .io import ANALYSES, PER_VALUE_FIELDS, MemoryStore, SweepFile, SweepLayout
+from .settings import DEFAULT_EQUILIBRIUM_TOL, Settings, check_memory
+from .simulate import WORKSPACE_VECTORS
+from .sweep_result import SweepResult, load_sweep, warn_no_orbit
+from .system import SWEEPABLE, System
 
 __all__ = [
     "sweep",
     "SweepResult",
+    "load_sweep",
     "MODES",
+    "BACKENDS",
     "compute_restart_chunk",
     "compute_continuation_chunk",
 ]
 
 MODES = ("restart", "continuation", "continuation-both")
 BACKENDS = ("local", "dask")
-
-
-# ----------------------------------------------------------------- pure chunks
-def _param_rows(system: System, names: Sequence[str], values: np.ndarray) -> np.ndarray:
-    """Packed parameter rows: ``values`` (..., len(names)) replace the named slots."""
-    base = system.to_array()
-    rows = np.broadcast_to(base, values.shape[:-1] + base.shape).copy()
-    for k, name in enumerate(names):
-        rows[..., PARAM_INDEX[name]] = values[..., k]
-    return rows
-
-
-def _kernel_args(system: System, settings: dict) -> tuple:
-    return (
-        system.n_oscillators,
-        system.is_dc_motor,
-        settings["t_end"],
-        settings["t_transient"],
-        settings["rtol"],
-        settings["atol"],
-        settings["h"],
-        settings["max_steps"],
-        settings["equilibrium_tol"],
-        settings["period_tol"],
-        MAX_PERIOD,
-        settings["max_points"],
-    )
-
-
-def _pack(points, t_points, ints, final_state) -> dict[str, np.ndarray]:
-    out = {"points": points, "t_points": t_points, "final_state": final_state}
-    for k, name in enumerate(SWEEP_INT_FIELDS):
-        out[name] = ints[..., k]
-    return out
-
-
-def compute_restart_chunk(
-    system: System, names: Sequence[str], values: np.ndarray, y0: np.ndarray, settings: dict
-) -> dict[str, np.ndarray]:
-    """Restart mode: trajectories from ``y0`` for each row of ``values`` (L, len(names)).
-
-    A pure function: the same inputs give bit-identical outputs on any machine
-    with the same compiled kernels, whatever the thread count.
-    """
-    rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    res = sweep_chunk(
-        METHODS.index(settings["method"]), y0, rows, *_kernel_args(system, settings),
-        numba.get_num_threads(),
-    )  # fmt: skip
-    return _pack(*res)
-
-
-def compute_continuation_chunk(
-    system: System,
-    names: Sequence[str],
-    values: np.ndarray,
-    y_starts: np.ndarray,
-    y0: np.ndarray,
-    settings: dict,
-) -> dict[str, np.ndarray]:
-    """Continuation mode: ``values`` (C, L, len(names)) are C chains run in parallel.
-
-    Chain c starts from ``y_starts[c]``; each later value starts from the
-    previous one's final state (``y0`` if that was not finite).
-    """
-    rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    res = continuation_chunk(
-        METHODS.index(settings["method"]), y0, np.ascontiguousarray(y_starts), rows,
-        *_kernel_args(system, settings),
-    )  # fmt: skip
-    return _pack(*res)
-
-
-# ----------------------------------------------------------------- the result
-_DATA_FIELDS = ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS)
-
-
-@dataclass
-class SweepResult:
-    """Result of :func:`sweep`.
-
-    Arrays have the value axes first: ``(n,)`` for a 1-D sweep, ``(n1, n2)``
-    for a 2-D one, with a leading branch axis of 2 ("up", "down") for mode
-    "continuation-both". When the sweep wrote a file, the arrays are read from
-    it on first access.
-
-    Attributes
-    ----------
-    param : str or tuple of str
-    values : ndarray or tuple of ndarray
-        The swept values (one array per axis).
-    points : ndarray, (..., max_points, n_state)
-        Poincare points in time order, NaN-padded; NaN where there is no orbit.
-    t_points : ndarray, (..., max_points)
-    count, period, n_steps, n_rejected, n_crossings : ndarray of int
-    status : ndarray of str
-        As in :class:`SimulationResult`.
-    final_state : ndarray, (..., n_state)
-    state_names : list of str
-    path : Path or None
-        The HDF5 file, if any.
-    """
-
-    param: str | tuple[str, str]
-    values: np.ndarray | tuple[np.ndarray, np.ndarray]
-    mode: str
-    state_names: list[str]
-    system: System
-    settings: dict
-    path: Path | None = None
-    _data: dict = field(default_factory=dict, repr=False)
-
-    def _get(self, name: str) -> np.ndarray:
-        if name not in self._data:
-            if self.path is None:
-                raise AttributeError(name)
-            import h5py
-
-            with h5py.File(self.path, "r", libver="latest", swmr=True) as h5:
-                if name not in h5:
-                    raise AttributeError(f"{self.path} has no {name!r} dataset")
-                self._data[name] = h5[name][...]
-        return self._data[name]
-
-    points = property(lambda self: self._get("points"))
-    t_points = property(lambda self: self._get("t_points"))
-    final_state = property(lambda self: self._get("final_state"))
-    count = property(lambda self: self._get("count"))
-    period = property(lambda self: self._get("period"))
-    n_steps = property(lambda self: self._get("n_steps"))
-    n_rejected = property(lambda self: self._get("n_rejected"))
-    n_crossings = property(lambda self: self._get("n_crossings"))
-    status_code = property(lambda self: self._get("status"))
-    sync_error = property(lambda self: self._get("sync_error"))
-    lyapunov = property(lambda self: self._get("lyapunov"))
-    lyapunov_fit = property(lambda self: self._get("lyapunov_fit"))
-
-    @property
-    def status(self) -> np.ndarray:
-        codes = self.status_code
-        names = np.array(STATUS_NAMES + ("missing",), dtype=object)
-        return names[np.where(codes < 0, len(STATUS_NAMES), codes)]
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return self.count.shape
-
-    def column(self, name: str) -> np.ndarray:
-        """One state variable of every point, shape (..., max_points)."""
-        return self.points[..., self.state_names.index(name)]
-
-    def summary(self) -> dict[str, int]:
-        """How many values ended with each status."""
-        st = self.status.ravel()
-        return {s: int(np.sum(st == s)) for s in STATUS_NAMES if np.any(st == s)}
-
-    def __repr__(self) -> str:
-        return f"SweepResult(param={self.param!r}, shape={self.shape}, mode={self.mode!r}, status={self.summary()})"
 
 
 # ----------------------------------------------------------------- validation
@@ -217,25 +71,69 @@ def _normalise_params(
             raise ValueError(f"the two swept parameters must differ, got {names}")
     else:
         raise ValueError(f"param must be a field name or a tuple of two, got {param!r}")
-    axes = []
-    for name, vals in zip(names, axes_in):
-        if name not in SWEEPABLE:
-            raise ValueError(
-                f"param {name!r} cannot be swept; choose one of {list(SWEEPABLE)} "
-                "(n_oscillators and drive change the state layout)"
-            )
-        arr = np.asarray(vals, dtype=float)
-        if arr.ndim != 1 or arr.size == 0:
-            raise ValueError(f"values for {name!r} must be a non-empty 1-D array")
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"values for {name!r} must be finite")
-        for v in np.unique(arr):  # per-field constraints: check each value once
-            try:
-                system.replace(**{name: float(v)})
-            except ValueError as exc:
-                raise ValueError(f"value {v!r} of swept param {name!r} is invalid: {exc}") from None
-        axes.append(arr)
-    return names, tuple(axes)
+    return names, tuple(_check_axis(system, n, v) for n, v in zip(names, axes_in))
+
+
+def _check_axis(system: System, name: str, vals: Any) -> np.ndarray:
+    """The values of one swept field as a float array, checked vectorised.
+
+    Every per-field rule of :class:`System` is an interval (m > 0, eta in
+    [1, 10], mu >= 0, ...), so checking the smallest and the largest value
+    checks them all: 1e8 values take a second, not minutes of System() calls.
+    """
+    if name not in SWEEPABLE:
+        raise ValueError(
+            f"param {name!r} cannot be swept; choose one of {list(SWEEPABLE)} "
+            "(n_oscillators and drive change the state layout)"
+        )
+    if isinstance(vals, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in vals):
+        raise ValueError(f"values for {name!r} must be numbers, got a boolean in {vals!r}")
+    arr = np.asarray(vals)
+    if arr.dtype.kind not in "iuf":  # strings, booleans, objects: not silently converted
+        raise ValueError(f"values for {name!r} must be numbers, got an array of {arr.dtype}")
+    arr = arr.astype(float)
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"values for {name!r} must be a non-empty 1-D array")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"values for {name!r} must be finite")
+    for v in (float(arr.min()), float(arr.max())):
+        try:
+            system.replace(**{name: v})
+        except ValueError as exc:
+            raise ValueError(f"value {v!r} of swept param {name!r} is invalid: {exc}") from None
+    return arr
+
+
+def _normalise_analyses(analyses) -> tuple[str, ...]:
+    if isinstance(analyses, str):
+        analyses = (analyses,)
+    try:
+        items = tuple(analyses)
+    except TypeError:
+        raise ValueError(f"analyses must be a sequence of names, got {analyses!r}") from None
+    unknown = [a for a in items if a not in ANALYSES]
+    if unknown:
+        raise ValueError(f"unknown analyses {unknown}; choose from {sorted(ANALYSES)}")
+    return tuple(a for a in ANALYSES if a in items)  # canonical order, no duplicates
+
+
+def _warn_order(name: str, values: np.ndarray, mode: str) -> None:
+    """Continuation follows the values in array order: say so when that order is odd."""
+    step = np.diff(values)
+    if mode == "continuation-both" and not np.all(step > 0):
+        what = "has duplicates" if np.any(step == 0) else "is not increasing"
+    elif mode == "continuation" and not (np.all(step > 0) or np.all(step < 0)):
+        what = "has duplicates" if np.any(step == 0) else "is not monotonic"
+    else:
+        return
+    warnings.warn(
+        f"values for {name!r} {what}; mode {mode!r} follows them in the given order "
+        + ("(the 'up' branch is array order, 'down' its reverse)" if mode != "continuation" else "")
+        + ", so each value starts from the previous one in that order. Sort them "
+        "(np.unique) for a branch that follows the parameter.",
+        UserWarning,
+        stacklevel=4,
+    )
 
 
 def _values_digest(axes: tuple[np.ndarray, ...]) -> list[str]:
@@ -244,60 +142,97 @@ def _values_digest(axes: tuple[np.ndarray, ...]) -> list[str]:
     ]
 
 
-# ----------------------------------------------------------------- work units
-@dataclass
-class _Unit:
-    kind: str  # "restart" | "continuation"
-    values: np.ndarray  # (L, k) or (C, L, k)
-    targets: list  # restart: (grid index, slice of the unit); continuation: one segment per chain
-    y_starts: np.ndarray | None = None
-    axis: int = 0  # continuation: grid axis the chains follow (1 when there is a branch axis)
+@dataclass(frozen=True)
+class _Plan:
+    """Everything that determines a sweep's results, validated."""
+
+    system: System
+    names: tuple[str, ...]
+    axes: tuple[np.ndarray, ...]
+    mode: str
+    settings: Settings
+    y0: np.ndarray
+    analyses: tuple[str, ...]
+
+    @property
+    def layout(self) -> SweepLayout:
+        branches = self.mode == "continuation-both"
+        return SweepLayout(
+            self.names, self.axes, branches, self.settings.max_points, self.system.state_names,
+            self.analyses, converged=self.settings.stop == "converged",
+        )  # fmt: skip
+
+    def config(self) -> dict[str, Any]:
+        """The configuration stored in (and hashed into) the result file."""
+        base = self.system.to_dict()
+        for name in self.names:
+            base[name] = None  # the base value of a swept field does not affect results
+        config = {
+            "system": base,
+            "param": list(self.names),
+            "n_values": [len(a) for a in self.axes],
+            "values_sha256": _values_digest(self.axes),
+            "mode": self.mode,
+            "settings": self.settings.to_dict(),
+            "y0": self.y0.tolist(),
+        }
+        if self.analyses:  # absent when empty, so files made before analyses existed resume
+            config["analyses"] = list(self.analyses)
+        return config
 
 
-def _restart_units(axes, done: np.ndarray, chunk: int) -> Iterator[_Unit]:
-    grid = tuple(len(a) for a in axes)
-    todo = np.flatnonzero(~done.reshape(-1))
-    for a in range(0, todo.size, chunk):
-        flat = todo[a : a + chunk]
-        idx = np.unravel_index(flat, grid)
-        vals = np.stack([axes[k][idx[k]] for k in range(len(axes))], axis=-1)
-        # group into contiguous runs along the last axis, for efficient HDF5 writes
-        targets = []
-        start = 0
-        for j in range(1, flat.size + 1):
-            if j == flat.size or flat[j] != flat[j - 1] + 1 or (flat[j] % grid[-1]) == 0:
-                lead = tuple(int(i[start]) for i in idx[:-1])
-                last = slice(int(idx[-1][start]), int(idx[-1][j - 1]) + 1)
-                targets.append((lead + (last,), slice(start, j)))
-                start = j
-        yield _Unit("restart", vals, targets)
+def _plan(system, param, values, mode, y0, analyses, settings: Settings) -> _Plan:
+    if not isinstance(system, System):
+        raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
+    names, axes = _normalise_params(system, param, values)
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    if mode != "restart":
+        _warn_order(names[0], axes[0], mode)
+    if settings.max_points == 0:
+        warnings.warn(
+            "max_points = 0: no Poincare points are kept, so no period is detected "
+            "(period 0 for every value); only status and final state are recorded",
+            UserWarning,
+            stacklevel=4,
+        )
+    return _Plan(
+        system, names, axes, mode, settings, system.initial_state(y0), _normalise_analyses(analyses)
+    )
 
 
-def _chains(axes, branches: bool) -> list[list[tuple]]:
-    """Every chain: a list of grid indices in the order the values are followed."""
-    n1 = len(axes[0])
-    others = [()] if len(axes) == 1 else [(j,) for j in range(len(axes[1]))]
-    chains = []
-    for b in (0, 1) if branches else (None,):
-        for rest in others:
-            order = range(n1) if b in (None, 0) else range(n1 - 1, -1, -1)
-            lead = () if b is None else (b,)
-            chains.append([lead + (i,) + rest for i in order])
-    return chains
+def _check_backend(backend: str, scheduler, n_workers) -> None:
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if backend == "local" and (scheduler is not None or n_workers is not None):
+        raise ValueError("scheduler and n_workers are only used with backend='dask'")
 
 
-# ------------------------------------------------------------------- backends
-def _run_local(units: Iterator[_Unit], system, names, y0, settings) -> Iterator[tuple[_Unit, dict]]:
-    for unit in units:
-        if unit.kind == "restart":
-            res = compute_restart_chunk(system, names, unit.values, y0, settings)
-        else:
-            res = compute_continuation_chunk(
-                system, names, unit.values, unit.y_starts, y0, settings
-            )
-        yield unit, res
+def _check_chunk_size(chunk_size) -> None:
+    if chunk_size is not None and (
+        isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1
+    ):
+        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
 
 
+def _check_sweep_memory(plan: _Plan, in_memory: bool, chunk_size: int, threads: int) -> None:
+    """Refuse, before allocating, a sweep whose result arrays cannot fit in memory."""
+    n_state, kp = plan.system.n_state, plan.settings.max_points
+    per_value = 8 * (n_state * (kp + 1) + kp + len(PER_VALUE_FIELDS) + 1)
+    if in_memory:
+        n_values = int(np.prod(plan.layout.grid_shape))
+        what = "the in-memory results (give out= to stream them to a file)"
+    else:  # a continuation unit holds a segment of chunk_size values of every chain
+        n_chains = int(np.prod(plan.layout.grid_shape)) // len(plan.axes[0])
+        n_values = chunk_size * (1 if plan.mode == "restart" else n_chains)
+        what = f"one unit of {n_values} values (lower chunk_size)"
+    check_memory(
+        n_values * per_value + threads * 8 * n_state * WORKSPACE_VECTORS,
+        f"{what} with n_oscillators = {plan.system.n_oscillators} and max_points = {kp}",
+    )
+
+
+# ------------------------------------------------------------------ the driver
 @contextlib.contextmanager
 def _numba_threads(threads: int | None):
     if threads is None:
@@ -315,6 +250,77 @@ def _numba_threads(threads: int | None):
         yield threads
     finally:
         numba.set_num_threads(old)
+
+
+def _open_store(plan: _Plan, out, title: str, notes: str) -> SweepFile | MemoryStore:
+    if out is None:
+        return MemoryStore(plan.layout)
+    from . import __version__
+
+    return SweepFile.open(
+        out, plan.config(), plan.layout, title=title, notes=notes, package_version=__version__
+    )
+
+
+def _progress_bar(stack: contextlib.ExitStack, progress, done: np.ndarray, names):
+    """A tqdm bar over all values (None when not shown or nothing is left)."""
+    n_total = done.size
+    n_todo = int(n_total - done.sum())
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    if not (show and n_todo):
+        return None
+    from tqdm.auto import tqdm
+
+    return stack.enter_context(
+        tqdm(
+            total=n_total,
+            initial=n_total - n_todo,
+            unit="value",
+            desc=f"sweep {','.join(names)}",
+            dynamic_ncols=True,
+            smoothing=0.1,
+        )  # fmt: skip
+    )
+
+
+def _units(plan: _Plan, done: np.ndarray, chunk_size: int, store) -> Iterator[WorkUnit]:
+    if plan.mode == "restart":
+        return restart_units(plan.axes, done, chunk_size)
+    branches = plan.mode == "continuation-both"
+    return continuation_units(plan.axes, branches, done, chunk_size, plan.y0, store.final_state_at)
+
+
+def _run_analyses(unit: WorkUnit, res: dict, plan: _Plan) -> dict:
+    """Add the requested analysis fields to a unit's results (values axes first)."""
+    from .analysis import largest_lyapunov, sync_error  # not needed by most sweeps
+
+    system, names, s = plan.system, plan.names, plan.settings
+    res = dict(res)
+    shape = res["count"].shape
+    vals = np.asarray(unit.values, dtype=float).reshape(-1, len(names))
+    if "sync" in plan.analyses:
+        pts = res["points"].reshape(-1, *res["points"].shape[-2:])
+        res["sync_error"] = np.array(
+            [sync_error(p, system.n_oscillators) for p in pts], dtype=float
+        ).reshape(shape)
+    if "lyapunov" in plan.analyses:
+        starts = unit_starts(unit, res, plan.y0).reshape(-1, plan.y0.size)
+        lam = np.full(len(vals), np.nan)
+        fit = np.full(len(vals), np.nan)
+        for i, (row, start) in enumerate(zip(vals, starts)):
+            sys_i = system.replace(**{n: float(v) for n, v in zip(names, row)})
+            ly = largest_lyapunov(sys_i, s.t_end, s.t_transient, y0=start, rtol=s.rtol, atol=s.atol)
+            lam[i], fit[i] = ly.exponent, ly.exponent_fit
+        res["lyapunov"] = lam.reshape(shape)
+        res["lyapunov_fit"] = fit.reshape(shape)
+    return res
+
+
+def _dask_runner(scheduler: str | None, n_workers: int | None):
+    """The Dask runner; imported on demand because importing distributed is slow."""
+    from .backends import dask_runner
+
+    return dask_runner(scheduler, n_workers)
 
 
 # ------------------------------------------------------------------------ API
@@ -345,6 +351,8 @@ def sweep(
     title: str = "",
     notes: str = "",
     analyses: Sequence[str] = (),
+    stop: str = "fixed",
+    dwell: float | None = None,
 ) -> SweepResult:
     """Sweep one or two System fields and record the Poincare points of every value.
 
@@ -401,6 +409,10 @@ def sweep(
         atol); expensive (~2-5x the sweep) and computed in this process after
         each unit. The list is part of the configuration (and its hash); the
         other results do not depend on it.
+    stop, dwell
+        As for :func:`simulate`: ``stop="converged"`` ends each trajectory once
+        it has converged (``t_end`` is the cap) and stores ``t_converged`` per
+        value (NaN where t_end came first). Part of the configuration.
 
     Returns
     -------
@@ -411,280 +423,45 @@ def sweep(
     UserWarning
         When some values give no orbit (equilibrium, stall, no crossings) or fail.
     """
-    if not isinstance(system, System):
-        raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
-    names, axes = _normalise_params(system, param, values)
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if backend == "local" and (scheduler is not None or n_workers is not None):
-        raise ValueError("scheduler and n_workers are only used with backend='dask'")
-    settings = resolve_settings(
+    settings = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
-        period_tol,
+        period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
-    y_init = system.initial_state(y0)
-    analyses = _normalise_analyses(analyses)
-    branches = mode == "continuation-both"
-    layout = SweepLayout(
-        names, axes, branches, settings["max_points"], system.state_names, analyses
-    )
-    base = system.to_dict()
-    for name in names:
-        base[name] = None  # the base value of a swept field does not affect results
-    from . import __version__
-
-    config = {
-        "system": base,
-        "param": list(names),
-        "n_values": [len(a) for a in axes],
-        "values_sha256": _values_digest(axes),
-        "mode": mode,
-        "settings": {k: v for k, v in settings.items()},
-        "y0": y_init.tolist(),
-    }
-    if analyses:  # absent when empty, so files made before analyses existed still resume
-        config["analyses"] = list(analyses)
-    grid = layout.grid_shape
-    n_total = int(np.prod(grid))
+    plan = _plan(system, param, values, mode, y0, analyses, settings)
+    _check_backend(backend, scheduler, n_workers)
+    _check_chunk_size(chunk_size)
     # resolved before any file is touched: a missing extra or a bad address fails first
-    runner = _run_local if backend == "local" else _dask_runner(scheduler, n_workers)
+    runner = run_local if backend == "local" else _dask_runner(scheduler, n_workers)
 
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))
         if chunk_size is None:
             chunk_size = getattr(runner, "default_chunk_size", 32 * nthreads)
-        elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
-            raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
-        if out is not None:
-            file = stack.enter_context(
-                SweepFile.open(
-                    out, config, layout, title=title, notes=notes, package_version=__version__
-                )
-            )
-            done = file.done_mask()
-        else:
-            file = None
-            done = np.zeros(grid, dtype=bool)
-            mem = {
-                "points": np.full(grid + (settings["max_points"], system.n_state), np.nan),
-                "t_points": np.full(grid + (settings["max_points"],), np.nan),
-                "final_state": np.full(grid + (system.n_state,), np.nan),
-                "done": np.zeros(grid, dtype="u1"),
-                **{
-                    k: np.full(grid, -1 if k == "status" else 0, dtype=v)
-                    for k, v in PER_VALUE_FIELDS.items()
-                },
-                **{k: np.full(grid, np.nan) for k in layout.analysis_fields},
-            }
-
-        def write(index, data):
-            if file is not None:
-                file.write(index, data)
-            else:
-                for k, v in data.items():
-                    mem[k][index] = v
-                mem["done"][index] = 1
-
-        def final_state_at(index):
-            return file.final_state_at(index) if file is not None else mem["final_state"][index]
-
-        n_todo = int(n_total - done.sum())
-        show = sys.stderr.isatty() if progress is None else bool(progress)
-        bar = None
-        if show and n_todo:
-            from tqdm.auto import tqdm
-
-            bar = stack.enter_context(
-                tqdm(
-                    total=n_total,
-                    initial=n_total - n_todo,
-                    unit="value",
-                    desc=f"sweep {','.join(names)}",
-                    dynamic_ncols=True,
-                    smoothing=0.1,
-                )  # fmt: skip
-            )
-
-        if mode == "restart":
-            units = _restart_units(axes, done, chunk_size)
-        else:
-            units = _continuation_units(axes, branches, done, chunk_size, y_init, final_state_at)
-
+        _check_sweep_memory(plan, out is None, chunk_size, nthreads)
+        store = stack.enter_context(_open_store(plan, out, title, notes))
+        done = store.done_mask()
+        bar = _progress_bar(stack, progress, done, plan.names)
+        units = _units(plan, done, chunk_size, store)
         # closing(): a failure while writing also stops the backend (cancels its tasks)
         results = stack.enter_context(
-            contextlib.closing(runner(units, system, names, y_init, settings))
+            contextlib.closing(runner(units, system, plan.names, plan.y0, settings))
         )
         for unit, res in results:
-            if analyses:
-                res = _run_analyses(unit, res, analyses, system, names, y_init, settings)
-            n_written = _write_unit(unit, res, write)
+            if plan.analyses:
+                res = _run_analyses(unit, res, plan)
+            n_written = write_unit(unit, res, store.write)
             if bar is not None:
                 bar.update(n_written)
 
     result = SweepResult(
-        param=names[0] if len(names) == 1 else names,
-        values=axes[0] if len(axes) == 1 else axes,
+        param=plan.names[0] if len(plan.names) == 1 else plan.names,
+        values=plan.axes[0] if len(plan.axes) == 1 else plan.axes,
         mode=mode,
         state_names=system.state_names,
         system=system,
         settings=settings,
         path=Path(out) if out is not None else None,
-        _data={} if file is not None else mem,
+        _data=store.data if out is None else {},
     )
-    _warn_no_orbit(result, names, axes, branches)
+    warn_no_orbit(result, plan.names, plan.axes, mode == "continuation-both")
     return result
-
-
-def _normalise_analyses(analyses) -> tuple[str, ...]:
-    if isinstance(analyses, str):
-        analyses = (analyses,)
-    try:
-        items = tuple(analyses)
-    except TypeError:
-        raise ValueError(f"analyses must be a sequence of names, got {analyses!r}") from None
-    unknown = [a for a in items if a not in ANALYSES]
-    if unknown:
-        raise ValueError(f"unknown analyses {unknown}; choose from {sorted(ANALYSES)}")
-    return tuple(a for a in ANALYSES if a in items)  # canonical order, no duplicates
-
-
-def _unit_starts(unit: _Unit, res: dict, y0: np.ndarray) -> np.ndarray:
-    """The initial state of every trajectory of a unit (shape of the value axes + state)."""
-    if unit.kind == "restart":
-        return np.broadcast_to(y0, (len(unit.values), y0.size))
-    final = res["final_state"]
-    starts = np.empty_like(final)
-    starts[:, 0] = unit.y_starts
-    starts[:, 1:] = final[:, :-1]
-    bad = ~np.all(np.isfinite(starts), axis=-1)
-    starts[bad] = y0  # as the continuation kernel: restart from y0 after a failure
-    return starts
-
-
-def _run_analyses(unit: _Unit, res: dict, analyses, system, names, y0, settings) -> dict:
-    """Add the requested analysis fields to a unit's results (values axes first)."""
-    from .analysis import largest_lyapunov, sync_error
-
-    res = dict(res)
-    shape = res["count"].shape
-    vals = np.asarray(unit.values, dtype=float).reshape(-1, len(names))
-    if "sync" in analyses:
-        pts = res["points"].reshape(-1, *res["points"].shape[-2:])
-        res["sync_error"] = np.array(
-            [sync_error(p, system.n_oscillators) for p in pts], dtype=float
-        ).reshape(shape)
-    if "lyapunov" in analyses:
-        starts = _unit_starts(unit, res, y0).reshape(-1, y0.size)
-        lam = np.full(len(vals), np.nan)
-        fit = np.full(len(vals), np.nan)
-        for i, (row, start) in enumerate(zip(vals, starts)):
-            sys_i = system.replace(**{n: float(v) for n, v in zip(names, row)})
-            ly = largest_lyapunov(
-                sys_i, settings["t_end"], settings["t_transient"], y0=start,
-                rtol=settings["rtol"], atol=settings["atol"],
-            )  # fmt: skip
-            lam[i], fit[i] = ly.exponent, ly.exponent_fit
-        res["lyapunov"] = lam.reshape(shape)
-        res["lyapunov_fit"] = fit.reshape(shape)
-    return res
-
-
-def _continuation_units(axes, branches, done, chunk, y0, final_state_at) -> Iterator[_Unit]:
-    """Rounds of chain segments; each round holds the next segment of every open chain."""
-    chains = _chains(axes, branches)
-    # resume: each chain continues after its last written value
-    pos = []
-    for chain in chains:
-        k = 0
-        while k < len(chain) and done[chain[k]]:
-            k += 1
-        pos.append(k)
-    while True:
-        open_ = [c for c, chain in enumerate(chains) if pos[c] < len(chain)]
-        if not open_:
-            return
-        length = min(chunk, min(len(chains[c]) - pos[c] for c in open_))
-        vals = []
-        starts = []
-        targets = []
-        for c in open_:
-            seg = chains[c][pos[c] : pos[c] + length]
-            vals.append(
-                [
-                    [axes[k][idx[k + (len(idx) - len(axes))]] for k in range(len(axes))]
-                    for idx in seg
-                ]
-            )
-            starts.append(y0 if pos[c] == 0 else final_state_at(chains[c][pos[c] - 1]))
-            targets.append(seg)
-            pos[c] += length
-        yield _Unit(
-            "continuation", np.asarray(vals, dtype=float), targets, np.asarray(starts, dtype=float),
-            axis=1 if branches else 0,
-        )  # fmt: skip
-
-
-def _write_unit(unit: _Unit, res: dict, write) -> int:
-    if unit.kind == "restart":
-        for index, sl in unit.targets:
-            write(index, {k: v[sl] for k, v in res.items()})
-        return len(unit.values)
-    n = 0
-    for c, seg in enumerate(unit.targets):
-        # the segment runs along the first parameter axis, downwards on the "down" branch
-        ax = unit.axis
-        lo = min(idx[ax] for idx in seg)
-        hi = max(idx[ax] for idx in seg)
-        order = slice(None) if seg[0][ax] <= seg[-1][ax] else slice(None, None, -1)
-        index = list(seg[0])
-        index[ax] = slice(lo, hi + 1)
-        write(tuple(index), {k: v[c][order] for k, v in res.items()})
-        n += len(seg)
-    return n
-
-
-def _warn_no_orbit(result: SweepResult, names, axes, branches) -> None:
-    status = result.status
-    bad = ~np.isin(status, ORBIT_STATUSES)
-    if not np.any(bad):
-        return
-    counts = {s: int(np.sum(status == s)) for s in np.unique(status[bad])}
-    detail = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-    example = ""
-    if len(axes) == 1 and not branches:
-        vals = axes[0][bad][:5]
-        example = f" (e.g. {names[0]} = {', '.join(f'{v:g}' for v in vals)})"
-    warnings.warn(
-        f"{int(bad.sum())} of {status.size} values gave no orbit: {detail}{example}. "
-        "Their points are NaN; see result.status.",
-        UserWarning,
-        stacklevel=3,
-    )
-
-
-def _dask_runner(scheduler: str | None, n_workers: int | None):
-    """The Dask runner (:func:`stickslip_fast.backends.dask_runner`), imported on demand."""
-    from .backends import dask_runner
-
-    return dask_runner(scheduler, n_workers)
-
-
-def load_sweep(path: str | Path) -> SweepResult:
-    """Open a sweep file written by :func:`sweep` as a :class:`SweepResult`."""
-    data = read_sweep(path)
-    cfg = data["config"]
-    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
-    system = System.from_dict(sysd)
-    names = tuple(cfg["param"])
-    return SweepResult(
-        param=names[0] if len(names) == 1 else names,
-        values=data["axes"][0] if len(names) == 1 else data["axes"],
-        mode=cfg["mode"],
-        state_names=data["state_names"],
-        system=system,
-        settings=cfg["settings"],
-        path=Path(path),
-        _data={**{k: data[k] for k in _DATA_FIELDS}, **data["analyses"]},
-    )

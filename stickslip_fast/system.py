@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .params import ETA_MAX, ETA_MIN, N_PARAMS, P_ETAP, PARAM_INDEX, eta_prime
+
 __all__ = [
     "System",
     "PARAM_INDEX",
@@ -27,26 +29,7 @@ __all__ = [
 ]
 
 DRIVES = ("constant", "dc-motor")
-ETA_MIN, ETA_MAX = 1.0, 10.0
 
-# Slots of the packed parameter array used by the compiled kernels. Slot P_ETAP
-# (eta') is derived from eta inside the kernels, never set by hand.
-P_M, P_K12, P_C, P_C12, P_MU, P_EPS, P_ETA, P_ETAP, P_VB, P_VB0, P_TB, P_BETA = range(12)
-N_PARAMS = 12
-
-PARAM_INDEX: dict[str, int] = {
-    "m": P_M,
-    "k12": P_K12,
-    "c": P_C,
-    "c12": P_C12,
-    "mu": P_MU,
-    "eps": P_EPS,
-    "eta": P_ETA,
-    "vb": P_VB,
-    "vb0": P_VB0,
-    "Tb": P_TB,
-    "beta": P_BETA,
-}
 #: Fields a sweep may vary (the float fields; ``n_oscillators`` changes the state size).
 SWEEPABLE = tuple(PARAM_INDEX)
 
@@ -88,9 +71,10 @@ class System:
     k12 : float
         Stiffness coupling (k2 - k1) / (k1 + k2).
     c, c12 : float
-        Damping matrix [[c, c12], [c12, c]].
+        Damping matrix [[c, c12], [c12, c]]. Negative c (an energy source,
+        "negative damping") is allowed: runaway motion is classified, not an error.
     mu : float
-        Friction scale mu-bar.
+        Friction scale mu-bar (>= 0).
     eps : float
         Smoothing parameter eps-bar of the friction law. Must be > 0.
     eta : float
@@ -101,7 +85,7 @@ class System:
     vb : float
         Belt speed of the constant drive.
     vb0, Tb, beta : float
-        DC motor: no-load belt speed, time constant (> 0) and load coefficient.
+        DC motor: no-load belt speed, time constant (> 0) and load coefficient (>= 0).
     n_oscillators : int
         Number of disks N >= 1.
     """
@@ -138,6 +122,14 @@ class System:
             raise ValueError(f"System.eps must be > 0, got {self.eps!r}")
         if self.Tb <= 0:
             raise ValueError(f"System.Tb must be > 0, got {self.Tb!r}")
+        # friction scale and motor load are products of positive physical constants (Eqs. 6,
+        # 18); negative values would make friction drive the disk (docs/model.md)
+        for name in ("mu", "beta"):
+            if getattr(self, name) < 0:
+                raise ValueError(
+                    f"System.{name} must be >= 0 (it scales the friction force; a negative "
+                    f"value has no physical meaning), got {getattr(self, name)!r}"
+                )
         if not ETA_MIN <= self.eta <= ETA_MAX:
             raise ValueError(
                 f"System.eta must lie in [{ETA_MIN}, {ETA_MAX}] (the range of the paper's "
@@ -280,8 +272,6 @@ class System:
 
     def to_array(self) -> np.ndarray:
         """Pack the float parameters for the compiled kernels (see PARAM_INDEX)."""
-        from .model import eta_prime  # local import: model imports this module's slots
-
         p = np.zeros(N_PARAMS)
         for name, idx in PARAM_INDEX.items():
             p[idx] = getattr(self, name)

@@ -1,126 +1,138 @@
-"""Trajectory and sweep kernels: pure compiled functions, parameters in, arrays out.
+"""Trajectory and sweep kernels on the driver: parameters in, arrays out.
 
-:func:`integrate` runs one trajectory with any of the three methods, records
-the Poincare points inline (keeping the most recent ``max_points`` in a ring
-buffer), optionally samples a uniform time grid, and classifies the run.
-:func:`sweep_chunk` runs many trajectories in one ``prange`` loop. Both call
-the same code, so a sweep value equals the corresponding simulate() bit for bit.
+:func:`integrate` runs one trajectory of the model with any of the three
+methods through :func:`driver.drive`, with a :class:`driver.PoincareObserver`
+(points at the local minima of x1 in a ring buffer, optional uniform samples)
+and classifies the run. :func:`sweep_chunk` and :func:`continuation_chunk` run
+many trajectories in one ``prange`` loop. All of them call the same
+:func:`_run`, so a sweep value equals the corresponding simulate() bit for bit.
+
+Kernel rules: nothing here raises (``error_model="numpy"``, no bounds that can
+fail), every loop is bounded (see :mod:`stickslip_fast.driver`), buffers are
+allocated once per thread lane outside the step loop, and every output slot of
+a value starts as ``ST_NOT_COMPUTED`` so that a value that was never computed
+can never pass for a result.
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit, prange
 
-from .integrators import (
-    DENSE_HERMITE,
-    DENSE_POLY,
-    accepted_step_factor,
-    dense_state,
-    erk_dense,
-    erk_step,
-    error_norm,
-    initial_step,
-    rejected_step_factor,
-    rosenbrock_dense,
-    rosenbrock_step,
+from .driver import (
+    S_T_CONVERGED,
+    STOP_AT_END,
+    Controls,
+    PoincareObserver,
+    Section,
+    converged_stop,
+    drive,
+    simple_stop,
 )
-from .model import eta_prime, jacobian_blocks, rhs
-from .poincare import (
-    ST_MAX_STEPS,
-    ST_NONFINITE,
-    ST_OK,
-    ST_UNDERFLOW,
-    classify,
-    detect_period,
-    locate_upcrossing,
-    motion_measure,
-)
-from .system import P_ETA, P_ETAP, P_VB0
-from .tableaus import DOPRI5, RODAS5P
+from .params import N_PARAMS, P_VB0
+from .poincare import classify, detect_period, motion_measure
+from .problems import alloc_bordered_linear, make_stickslip
+from .status import ST_ERROR, ST_NOT_COMPUTED, ST_OK
+from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, alloc_workspace
 
 METHODS = ("rodas5p", "dopri5", "dopri5-fixed")
 M_RODAS5P, M_DOPRI5, M_DOPRI5_FIXED = range(3)
 
-# Tableaus as module constants: numba freezes them into the compiled kernels.
-_RB_GAMMA = float(RODAS5P.gamma)
-_RB_A = RODAS5P.a
-_RB_C = RODAS5P.C
-_RB_B = RODAS5P.b
-_RB_E = RODAS5P.b_err
-_RB_H = RODAS5P.H
-_RB_Q = RODAS5P.embedded_order + 1.0
-_RK_A = DOPRI5.A
-_RK_B = DOPRI5.b
-_RK_E = DOPRI5.b_err
-_RK_P = DOPRI5.dense
-_RK_Q = 5.0
-
-_JIT = dict(cache=True, nogil=True)
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_PJIT = dict(parallel=True, cache=True, nogil=True, error_model="numpy")
 
 # slots of the integer and float statistics arrays
 I_STEPS, I_REJECTED, I_CROSSINGS, I_SAMPLES = range(4)
 N_STAT_I = 4
-F_T_FINAL, F_AMPLITUDE = range(2)
-N_STAT_F = 2
+F_T_FINAL, F_AMPLITUDE, F_T_CONVERGED = range(3)
+N_STAT_F = 3
+
+#: The model's Poincare section: dx1 = 0 crossed upwards (local minima of x1).
+X1_MINIMA = Section(1, True)
+
+#: The default ``abort`` flag of the kernels: never set.
+NO_ABORT = np.zeros(1, dtype=np.int64)
+
+#: Columns of the integer output of the sweep kernels.
+SWEEP_INT_FIELDS = ("count", "period", "status", "n_steps", "n_rejected", "n_crossings")
 
 
 @njit(**_JIT)
-def _observe(
-    kind,
-    t0,
-    h,
-    y0,
-    y1,
-    D,
-    t_transient,
-    pts,
-    tpts,
-    n_cross,
-    samples,
-    sample_dt,
-    n_samp,
-    ymin,
-    ymax,
-):
-    """Record what happened inside an accepted step [t0, t0 + h].
+def _all_finite(a) -> bool:
+    for v in a.flat:
+        if not math.isfinite(v):
+            return False
+    return True
 
-    Returns the updated (crossing count, sample count).
+
+#: The settings of a trajectory, as the kernels pass them on. ``stop_kind``:
+#: STOP_FIXED (run to t_end) or STOP_WHEN_CONVERGED (see :func:`driver.converged_stop`).
+RunSettings = namedtuple(
+    "RunSettings",
+    [
+        "t_end", "t_transient", "rtol", "atol", "h_fixed", "max_steps", "equilibrium_tol",
+        "period_tol", "max_period", "stop_kind", "dwell",
+    ],
+)  # fmt: skip
+STOP_FIXED, STOP_WHEN_CONVERGED = 0, 1
+#: Converged stopping: points repeat over >= 3 periods and >= 8 points.
+CONVERGED_MIN_REPEATS = 3
+CONVERGED_MIN_POINTS = 8
+
+
+@njit(**_JIT)
+def _stop_rule(rs, n_osc, dc, n):
+    if rs.stop_kind == STOP_WHEN_CONVERGED:
+        return converged_stop(
+            rs.period_tol, rs.max_period, CONVERGED_MIN_REPEATS, CONVERGED_MIN_POINTS,
+            rs.equilibrium_tol, rs.dwell, n_osc, dc, n,
+        )  # fmt: skip
+    return simple_stop(STOP_AT_END, 0, n)
+
+
+@njit(**_JIT)
+def _run(method, y0, p, n_osc, dc, rs, p_buf, lin, ws, obs, stop, y, istat, fstat, abort) -> int:
+    """One classified trajectory from y0 with a method record; buffers given.
+
+    With converged stopping the observer watches from t = 0 (``rs.t_transient``
+    is not used) and ``fstat[1]`` receives the time of convergence (NaN if the
+    run reached t_end first).
     """
-    t1 = t0 + h
     n = y0.size
-    # Poincare: dx1 crosses zero upwards (a local minimum of x1)
-    if y0[1] < 0.0 <= y1[1]:
-        theta = locate_upcrossing(kind, y0, y1, D, 1)
-        tc = t0 + theta * h
-        if tc >= t_transient:
-            cap = pts.shape[0]
-            if cap > 0:
-                slot = n_cross % cap
-                dense_state(kind, theta, y0, y1, D, pts[slot])
-                tpts[slot] = tc
-            n_cross += 1
-    # uniform samples on t_transient + k * sample_dt
-    n_grid = samples.shape[0]
-    while n_samp < n_grid:
-        ts = t_transient + n_samp * sample_dt
-        if ts > t1:
-            break
-        theta = (ts - t0) / h
-        theta = min(1.0, max(0.0, theta))
-        dense_state(kind, theta, y0, y1, D, samples[n_samp])
-        n_samp += 1
-    # amplitude of the motion over the recording window
-    if t1 >= t_transient:
+    prob = make_stickslip(p, n_osc, dc, p_buf)
+    for i in range(n):
+        y[i] = y0[i]
+    fstat[1] = math.nan
+    if not (_all_finite(prob.p) and _all_finite(y)):
+        obs.counts[0] = 0
+        obs.counts[1] = 0
+        istat[0] = 0
+        istat[1] = 0
+        fstat[0] = 0.0
         for i in range(n):
-            v = y1[i]
-            if v < ymin[i]:
-                ymin[i] = v
-            if v > ymax[i]:
-                ymax[i] = v
-    return n_cross, n_samp
+            obs.ymin[i] = math.nan
+            obs.ymax[i] = math.nan
+        return ST_ERROR
+    ctl = Controls(rs.rtol, rs.atol, rs.h_fixed, rs.max_steps)
+    status = drive(method, prob, lin, ws, y, rs.t_end, ctl, obs, stop, abort, istat, fstat)
+    fstat[1] = stop.state[S_T_CONVERGED]
+    if status == ST_OK:
+        amp = motion_measure(obs.ymin, obs.ymax, n_osc, dc)
+        vb_end = y[n - 1] if dc else 0.0
+        status = classify(amp, obs.counts[0], dc, vb_end, prob.p[P_VB0], rs.equilibrium_tol)
+    return status
+
+
+@njit(**_JIT)
+def _make_observer(rs, pts, tpts, samples, sample_dt, n):
+    t_rec = 0.0 if rs.stop_kind == STOP_WHEN_CONVERGED else rs.t_transient
+    return PoincareObserver(
+        X1_MINIMA, t_rec, pts, tpts, samples, sample_dt, np.empty(n), np.empty(n),
+        np.zeros(2, dtype=np.int64),
+    )  # fmt: skip
 
 
 @njit(**_JIT)
@@ -144,6 +156,11 @@ def integrate(
     y_end: np.ndarray,
     stat_i: np.ndarray,
     stat_f: np.ndarray,
+    stop_kind: int = STOP_FIXED,
+    dwell: float = 0.0,
+    period_tol: float = 0.0,
+    max_period: int = 64,
+    abort: np.ndarray = NO_ABORT,
 ) -> int:
     """Integrate one trajectory from t = 0 to ``t_end``; return its status code.
 
@@ -151,152 +168,69 @@ def integrate(
     Outputs: ``pts``/``tpts`` (ring buffer of the last Poincare points; see
     ``stat_i[I_CROSSINGS]`` for the total), ``samples`` (uniform grid from
     t_transient), ``y_end`` (state at the last accepted time), ``stat_i``
-    (steps, rejected, crossings, samples) and ``stat_f`` (final time and the
-    :func:`motion_measure` of the recording window).
+    (steps, rejected, crossings, samples) and ``stat_f`` (final time, the
+    :func:`motion_measure` of the recording window, time of convergence).
+    ``stop_kind`` STOP_WHEN_CONVERGED ends the run once it has converged (see
+    :func:`driver.converged_stop`; ``dwell``, ``period_tol`` and ``max_period``
+    are its settings). ``abort`` (int64[1]) ends the run with "interrupted"
+    when set from another thread.
     """
     n = y0.size
-    p = p.copy()
-    p[P_ETAP] = eta_prime(p[P_ETA])
-
-    y = y0.copy()
-    ynew = np.empty(n)
-    ytmp = np.empty(n)
-    ftmp = np.empty(n)
-    f0 = np.empty(n)
-    err = np.empty(n)
-    ymin = np.full(n, np.inf)
-    ymax = np.full(n, -np.inf)
-    rosen = method == M_RODAS5P
-    if rosen:
-        stages = _RB_B.size
-        D = np.empty((_RB_H.shape[0], n))
-        kind = DENSE_HERMITE
-        order_q = _RB_Q
+    rs = RunSettings(
+        t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol, period_tol,
+        max_period, stop_kind, dwell,
+    )  # fmt: skip
+    p_buf = np.empty(N_PARAMS)
+    lin = alloc_bordered_linear(n_osc, n)
+    obs = _make_observer(rs, pts, tpts, samples, sample_dt, n)
+    stop = _stop_rule(rs, n_osc, dc, n)
+    istat = np.zeros(2, dtype=np.int64)
+    fstat = np.zeros(2)
+    if method == M_RODAS5P:
+        ws = alloc_workspace(RODAS5P_METHOD, n)
+        status = _run(
+            RODAS5P_METHOD,
+            y0,
+            p,
+            n_osc,
+            dc,
+            rs,
+            p_buf,
+            lin,
+            ws,
+            obs,
+            stop,
+            y_end,
+            istat,
+            fstat,
+            abort,
+        )
     else:
-        stages = _RK_B.size
-        D = np.empty((_RK_P.shape[1], n))
-        kind = DENSE_POLY
-        order_q = _RK_Q
-    K = np.empty((stages, n))
-    jb = np.empty((n_osc, 4, 4))
-    jcol = np.zeros((n_osc, 4))
-    jrow = np.zeros((n_osc, 4))
-    lu = np.empty((n_osc, 4, 4))
-    piv = np.empty((n_osc, 4), dtype=np.int64)
-    z = np.zeros((n_osc, 4))
-
-    n_steps = 0
-    n_rej = 0
-    n_cross = 0
-    n_samp = 0
-    status = ST_OK
-    t = 0.0
-
-    rhs(y, p, n_osc, dc, f0)
-    if not rosen:
-        for i in range(n):
-            K[0, i] = f0[i]  # FSAL: the first stage of the first step
-    if samples.shape[0] > 0 and t_transient <= 0.0:
-        for i in range(n):
-            samples[0, i] = y[i]
-        n_samp = 1
-    if t_transient <= 0.0:
-        for i in range(n):
-            ymin[i] = y[i]
-            ymax[i] = y[i]
-
-    # h_fixed > 0 turns any method into a fixed-step one (convergence studies)
-    adaptive = h_fixed <= 0.0
-    if adaptive:
-        h = initial_step(y, f0, p, n_osc, dc, rtol, atol, order_q - 1.0, ytmp, ftmp)
-        h = min(h, t_end)
-    else:
-        h = h_fixed
-    err_prev = 1.0
-    last_rejected = False
-    jac_fresh = False
-    jcorner = 0.0
-
-    while t < t_end:
-        if n_steps >= max_steps:
-            status = ST_MAX_STEPS
-            break
-        # land exactly on t_end; avoid a sliver of a last step
-        if t + h >= t_end or (adaptive and t + 1.01 * h >= t_end):
-            h = t_end - t
-        if rosen:
-            if not jac_fresh:
-                jcorner = jacobian_blocks(y, p, n_osc, dc, jb, jcol, jrow)
-                jac_fresh = True
-            ok = rosenbrock_step(
-                _RB_GAMMA, _RB_A, _RB_C, _RB_B, _RB_E, y, f0, h, p, n_osc, dc,
-                jb, jcol, jrow, jcorner, lu, piv, z, K, ytmp, ftmp, ynew, err,
-            )  # fmt: skip
-        else:
-            erk_step(_RK_A, _RK_B, _RK_E, y, h, p, n_osc, dc, K, ytmp, ynew, err)
-            ok = True
-        if ok:
-            for i in range(n):
-                if not math.isfinite(ynew[i]):
-                    ok = False
-                    break
-        if not adaptive:
-            if not ok:
-                status = ST_NONFINITE
-                break
-            en = 0.0
-        elif ok:
-            en = error_norm(err, y, ynew, rtol, atol)
-            if not math.isfinite(en):
-                ok = False
-        if adaptive and (not ok or en > 1.0):
-            n_rej += 1
-            h *= rejected_step_factor(en, ok, order_q)
-            last_rejected = True
-            if h < 1e-14 * max(1.0, abs(t)):
-                status = ST_UNDERFLOW if ok else ST_NONFINITE
-                break
-            continue
-
-        # accepted; dense output only where a crossing or a sample needs it
-        n_steps += 1
-        if (y[1] < 0.0 <= ynew[1]) or (
-            n_samp < samples.shape[0] and t_transient + n_samp * sample_dt <= t + h
-        ):
-            if rosen:
-                rosenbrock_dense(_RB_H, K, D)
-            else:
-                erk_dense(_RK_P, K, h, D)
-        n_cross, n_samp = _observe(
-            kind, t, h, y, ynew, D, t_transient, pts, tpts, n_cross, samples, sample_dt,
-            n_samp, ymin, ymax,
-        )  # fmt: skip
-        t = t + h
-        for i in range(n):
-            y[i] = ynew[i]
-        if rosen:
-            rhs(y, p, n_osc, dc, f0)
-            jac_fresh = False
-        else:
-            for i in range(n):
-                K[0, i] = K[stages - 1, i]
-        if adaptive:
-            h *= accepted_step_factor(en, err_prev, order_q, last_rejected)
-            err_prev = max(en, 1e-10)
-            last_rejected = False
-
-    for i in range(n):
-        y_end[i] = y[i]
-    stat_i[I_STEPS] = n_steps
-    stat_i[I_REJECTED] = n_rej
-    stat_i[I_CROSSINGS] = n_cross
-    stat_i[I_SAMPLES] = n_samp
-    stat_f[F_T_FINAL] = t
-    amp = motion_measure(ymin, ymax, n_osc, dc)
-    stat_f[F_AMPLITUDE] = amp
-    if status == ST_OK:
-        vb_end = y[n - 1] if dc else 0.0
-        status = classify(amp, n_cross, dc, vb_end, p[P_VB0], equilibrium_tol)
+        ws2 = alloc_workspace(DOPRI5_METHOD, n)
+        status = _run(
+            DOPRI5_METHOD,
+            y0,
+            p,
+            n_osc,
+            dc,
+            rs,
+            p_buf,
+            lin,
+            ws2,
+            obs,
+            stop,
+            y_end,
+            istat,
+            fstat,
+            abort,
+        )
+    stat_i[I_STEPS] = istat[0]
+    stat_i[I_REJECTED] = istat[1]
+    stat_i[I_CROSSINGS] = obs.counts[0]
+    stat_i[I_SAMPLES] = obs.counts[1]
+    stat_f[F_T_FINAL] = fstat[0]
+    stat_f[F_AMPLITUDE] = motion_measure(obs.ymin, obs.ymax, n_osc, dc)
+    stat_f[F_T_CONVERGED] = fstat[1]
     return status
 
 
@@ -315,45 +249,105 @@ def unroll_ring(pts: np.ndarray, tpts: np.ndarray, n_cross: int, out: np.ndarray
 
 
 @njit(**_JIT)
-def _run_value(
-    method, y0, p, n_osc, dc, t_end, t_transient, rtol, atol, h_fixed, max_steps,
-    equilibrium_tol, period_tol, max_period, max_points,
-    points, t_points, out_i, final_state,
+def _lane_values(
+    method, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points, points,
+    t_points, ints, t_conv, final_state, abort,
 ):  # fmt: skip
-    """One sweep value: integrate, unroll the points into time order, find the period.
+    """Run values ``first + k * stride`` (k < count) with one set of buffers.
 
-    ``out_i`` receives (count, period, status, n_steps, n_rejected, n_crossings);
-    ``points``/``t_points`` must be NaN-filled on entry and stay NaN unless the
-    run has an orbit (status "ok").
+    ``params``, ``points``, ``t_points``, ``ints``, ``t_conv`` and
+    ``final_state`` are indexed by value. Restart (``chain`` False): every value
+    starts from ``y0s[v]``. Chain (``chain`` True): value k starts from the
+    final state of the last value before it that did not fail (``y0s[first]``
+    for the first, and when none did).
     """
-    n = y0.size
-    ring = np.empty((max_points, n))
-    tring = np.empty(max_points)
-    samples = np.empty((0, n))
-    stat_i = np.zeros(N_STAT_I, dtype=np.int64)
-    stat_f = np.zeros(N_STAT_F)
-    st = integrate(
-        method, y0, p, n_osc, dc, t_end, t_transient, rtol, atol, h_fixed, max_steps,
-        equilibrium_tol, ring, tring, samples, 1.0, final_state, stat_i, stat_f,
-    )  # fmt: skip
-    count = 0
-    period = 0
-    if st == ST_OK:
-        count = unroll_ring(ring, tring, stat_i[I_CROSSINGS], points, t_points)
-        period = detect_period(points, count, period_tol, max_period)
-    out_i[0] = count
-    out_i[1] = period
-    out_i[2] = st
-    out_i[3] = stat_i[I_STEPS]
-    out_i[4] = stat_i[I_REJECTED]
-    out_i[5] = stat_i[I_CROSSINGS]
+    n = y0s.shape[1]
+    p_buf = np.empty(N_PARAMS)
+    lin = alloc_bordered_linear(n_osc, n)
+    ws = alloc_workspace(method, n)
+    obs = _make_observer(
+        rs, np.empty((max_points, n)), np.empty(max_points), np.empty((0, n)), 1.0, n
+    )
+    stop = _stop_rule(rs, n_osc, dc, n)
+    y = np.empty(n)
+    start = y0s[first].copy()
+    istat = np.zeros(2, dtype=np.int64)
+    fstat = np.zeros(2)
+    for k in range(count):
+        v = first + k * stride
+        y_from = start if chain else y0s[v]
+        st = _run(
+            method,
+            y_from,
+            params[v],
+            n_osc,
+            dc,
+            rs,
+            p_buf,
+            lin,
+            ws,
+            obs,
+            stop,
+            y,
+            istat,
+            fstat,
+            abort,
+        )
+        count_pts = 0
+        period = 0
+        if st == ST_OK:
+            count_pts = unroll_ring(obs.pts, obs.tpts, obs.counts[0], points[v], t_points[v])
+            period = detect_period(points[v], count_pts, rs.period_tol, rs.max_period)
+        for i in range(n):
+            final_state[v, i] = y[i]
+        t_conv[v] = fstat[1]
+        out = ints[v]
+        out[0] = count_pts
+        out[1] = period
+        out[3] = istat[0]
+        out[4] = istat[1]
+        out[5] = obs.counts[0]
+        out[2] = st
+        if chain and _usable_start(st) and _all_finite(y):
+            for i in range(n):
+                start[i] = y[i]
 
 
-#: Columns of the integer output of the sweep kernels.
-SWEEP_INT_FIELDS = ("count", "period", "status", "n_steps", "n_rejected", "n_crossings")
+@njit(**_JIT)
+def _usable_start(status: int) -> bool:
+    # a failed run's final state is no start for the next value of a chain
+    return 0 <= status <= 3  # ok, equilibrium, stalled, no-crossings
 
 
-@njit(parallel=True, cache=True)
+@njit(**_JIT)
+def _lane_dispatch(
+    method, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points, points,
+    t_points, ints, t_conv, final_state, abort,
+):  # fmt: skip
+    if method == M_RODAS5P:
+        _lane_values(
+            RODAS5P_METHOD, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points,
+            points, t_points, ints, t_conv, final_state, abort,
+        )  # fmt: skip
+    else:
+        _lane_values(
+            DOPRI5_METHOD, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points,
+            points, t_points, ints, t_conv, final_state, abort,
+        )  # fmt: skip
+
+
+@njit(**_JIT)
+def _outputs(nv: int, max_points: int, n: int):
+    points = np.full((nv, max_points, n), np.nan)
+    t_points = np.full((nv, max_points), np.nan)
+    ints = np.zeros((nv, 6), dtype=np.int64)
+    ints[:, 2] = ST_NOT_COMPUTED
+    final_state = np.full((nv, n), np.nan)
+    t_conv = np.full(nv, np.nan)
+    return points, t_points, ints, t_conv, final_state
+
+
+@njit(**_PJIT)
 def sweep_chunk(
     method: int,
     y0: np.ndarray,
@@ -370,38 +364,58 @@ def sweep_chunk(
     period_tol: float,
     max_period: int,
     max_points: int,
+    stop_kind: int,
+    dwell: float,
     lanes: int,
+    abort: np.ndarray = NO_ABORT,
 ):
     """Restart mode: one independent trajectory from ``y0`` per row of ``params``.
 
-    ``params`` is (n_values, N_PARAMS). Each trajectory is sequential and
-    independent, so results do not depend on the thread count, on ``lanes`` or
-    on how values are grouped into chunks. Returns (points (n, max_points, n_state),
-    t_points (n, max_points), ints (n, 6) with columns SWEEP_INT_FIELDS,
-    final_state (n, n_state)); points are in time order and NaN-padded.
+    ``params`` is (n_values, N_PARAMS); ``y0`` is one start (n_state,) for all
+    values or one per value (n_values, n_state). Each trajectory is sequential
+    and independent, so results do not depend on the thread count, on ``lanes``
+    or on how values are grouped into chunks. Returns (points (n, max_points,
+    n_state), t_points (n, max_points), ints (n, 6) with columns
+    SWEEP_INT_FIELDS, t_converged (n,), final_state (n, n_state)); points are
+    in time order and NaN-padded. ``stop_kind``/``dwell``: see :func:`integrate`.
+    A value whose status is still ST_NOT_COMPUTED (-1) was not run (``abort``
+    was set); callers must not store it.
     """
     nv = params.shape[0]
-    n = y0.size
-    points = np.full((nv, max_points, n), np.nan)
-    t_points = np.full((nv, max_points), np.nan)
-    ints = np.zeros((nv, 6), dtype=np.int64)
-    final_state = np.full((nv, n), np.nan)
+    y0s = _starts(y0, nv)
+    n = y0s.shape[1]
+    rs = RunSettings(
+        t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol, period_tol,
+        max_period, stop_kind, dwell,
+    )  # fmt: skip
+    points, t_points, ints, t_conv, final_state = _outputs(nv, max_points, n)
     # prange splits its range into contiguous blocks, one per thread. Neighbouring
     # values cost about the same (a block of cheap equilibria next to a block of
     # long orbits), so each thread takes an interleaved lane of values instead:
     # pass lanes = the thread count. Results do not depend on it.
     lanes = max(1, min(nv, lanes))
     for lane in prange(lanes):
-        for v in range(lane, nv, lanes):
-            _run_value(
-                method, y0, params[v], n_osc, dc, t_end, t_transient, rtol, atol, h_fixed,
-                max_steps, equilibrium_tol, period_tol, max_period, max_points,
-                points[v], t_points[v], ints[v], final_state[v],
-            )  # fmt: skip
-    return points, t_points, ints, final_state
+        count = (nv - lane + lanes - 1) // lanes
+        _lane_dispatch(
+            method, lane, lanes, count, y0s, False, params, n_osc, dc, rs, max_points, points,
+            t_points, ints, t_conv, final_state, abort,
+        )  # fmt: skip
+    return points, t_points, ints, t_conv, final_state
 
 
-@njit(parallel=True, cache=True)
+@njit(**_JIT)
+def _starts(y0, nv):
+    """One start per value: broadcast a single (n_state,) start."""
+    if y0.ndim == 2:
+        return np.ascontiguousarray(y0.reshape(-1, y0.shape[-1]))
+    out = np.empty((nv, y0.shape[-1]))
+    for v in range(nv):
+        for i in range(y0.shape[-1]):
+            out[v, i] = y0.flat[i]
+    return out
+
+
+@njit(**_PJIT)
 def continuation_chunk(
     method: int,
     y0: np.ndarray,
@@ -419,34 +433,42 @@ def continuation_chunk(
     period_tol: float,
     max_period: int,
     max_points: int,
+    stop_kind: int,
+    dwell: float,
+    abort: np.ndarray = NO_ABORT,
 ):
     """Continuation mode: chains of values, each starting from the previous final state.
 
     ``params`` is (n_chains, length, N_PARAMS) and ``y_starts`` (n_chains,
     n_state) the state each chain starts from. Chains run in parallel; within
-    a chain the values run in order. A value whose final state is not finite
-    hands ``y0`` to the next one instead. Outputs as :func:`sweep_chunk`, with a
-    leading chain axis.
+    a chain the values run in order. After a value that failed (nonfinite,
+    step-underflow, max-steps, error, interrupted) the next value starts from
+    the last good final state of the chain (``y_starts[c]`` if there is none);
+    ``y0`` is unused and kept for the call signature. Outputs as
+    :func:`sweep_chunk`, with a leading chain axis.
     """
     nc = params.shape[0]
     nl = params.shape[1]
-    n = y0.size
-    points = np.full((nc, nl, max_points, n), np.nan)
-    t_points = np.full((nc, nl, max_points), np.nan)
-    ints = np.zeros((nc, nl, 6), dtype=np.int64)
-    final_state = np.full((nc, nl, n), np.nan)
+    n = y_starts.shape[1]
+    flat = params.reshape(nc * nl, params.shape[2])
+    rs = RunSettings(
+        t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol, period_tol,
+        max_period, stop_kind, dwell,
+    )  # fmt: skip
+    points, t_points, ints, t_conv, final_state = _outputs(nc * nl, max_points, n)
+    starts = np.empty((nc * nl, n))
+    for c in range(nc):
+        for i in range(n):
+            starts[c * nl, i] = y_starts[c, i]
     for c in prange(nc):
-        y_start = y_starts[c].copy()
-        for k in range(nl):
-            _run_value(
-                method, y_start, params[c, k], n_osc, dc, t_end, t_transient, rtol, atol,
-                h_fixed, max_steps, equilibrium_tol, period_tol, max_period, max_points,
-                points[c, k], t_points[c, k], ints[c, k], final_state[c, k],
-            )  # fmt: skip
-            finite = True
-            for i in range(n):
-                if not math.isfinite(final_state[c, k, i]):
-                    finite = False
-            for i in range(n):
-                y_start[i] = final_state[c, k, i] if finite else y0[i]
-    return points, t_points, ints, final_state
+        _lane_dispatch(
+            method, c * nl, 1, nl, starts, True, flat, n_osc, dc, rs, max_points, points,
+            t_points, ints, t_conv, final_state, abort,
+        )  # fmt: skip
+    return (
+        points.reshape(nc, nl, max_points, n),
+        t_points.reshape(nc, nl, max_points),
+        ints.reshape(nc, nl, 6),
+        t_conv.reshape(nc, nl),
+        final_state.reshape(nc, nl, n),
+    )

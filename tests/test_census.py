@@ -306,9 +306,18 @@ def test_bad_input_is_named(kwargs, match):
         census(ASYM, "eta", [2.0], t_end=10.0, progress=False, **kwargs)
 
 
-def test_converged_stop_is_not_available_yet():
-    with pytest.raises(NotImplementedError, match="stop"):
-        census(ASYM, "eta", [2.0], t_end=10.0, stop="converged")
+def test_converged_stopping_gives_the_same_attractors(eta2_4):
+    conv = census(ASYM, "eta", [2.0, 4.0], n_starts=16, stop="converged", progress=False, **KW)
+    np.testing.assert_array_equal(conv.labels, eta2_4.labels)
+    for a_list, b_list in zip(conv.attractors, eta2_4.attractors):
+        assert [(a.id, a.kind, a.period, a.count) for a in a_list] == [
+            (b.id, b.kind, b.period, b.count) for b in b_list
+        ]
+        for a, b in zip(a_list, b_list):
+            np.testing.assert_allclose(a.points, b.points, atol=1e-5)
+    t_conv = conv.raw["t_converged"]
+    assert np.all(np.isfinite(t_conv)) and np.all(t_conv < KW["t_end"])
+    assert conv.raw["n_steps"].sum() < eta2_4.raw["n_steps"].sum()
 
 
 def test_a_lone_equilibrium_branch_is_one_track():

@@ -1,0 +1,341 @@
+"""Problem records: what the generic steppers integrate.
+
+A problem is a small immutable record (a namedtuple) holding its parameters.
+The steppers of :mod:`stickslip_fast.steppers` call only the generic functions
+below, and Numba dispatches them on the record's *type* (``numba.extending.
+overload``), so one compiled stepper serves every problem and still lands in
+Numba's on-disk cache (passing functions as arguments, or building steppers in
+closures, would not).
+
+The generic functions
+---------------------
+``problem_f(prob, y, out)``
+    Right-hand side f(y) into ``out``.
+``problem_jac(prob, y, lin)``
+    Evaluate the Jacobian at y into the linear workspace ``lin``.
+``problem_factor(prob, lin, sigma) -> bool``
+    Factor W = sigma I - J; False if W is singular or not finite.
+``problem_solve(prob, lin, b)``
+    Solve W x = b in place.
+``problem_error_norm(prob, err, y0, y1, rtol, atol) -> float``
+    The step-size controller's error norm (default: :func:`error_norm`).
+``problem_initial_step(prob, y, f0, rtol, atol, order, work, fwork) -> float``
+    Starting step (default: :func:`initial_step`).
+
+Records
+-------
+:class:`StickSlip`
+    The paper's model, y' = f(y), with the bordered O(N) linear algebra.
+:class:`StickSlipTangent`
+    The model with ``n_tangent`` tangent vectors, Y = (y, u_1, ..., u_k) with
+    u_j' = J(y) u_j (the variational equations: k = 1 for a Lyapunov exponent,
+    k = n for the state-transition matrix). Its exact Jacobian is block lower
+    triangular, [[J, 0], [H(u_j), J]] with H(u) v = D^2 f(y)[u, v], so W is
+    factored once (the model's W) and every solve is a block forward
+    substitution. Its error norm scales each u_j by ``tangent_atol |u_j|``:
+    a direction's absolute tolerance is relative to its length.
+
+Adding a problem: define a namedtuple record, a linear workspace, and an
+``overload`` of each generic function that tests ``instance_class`` (see
+:mod:`stickslip_fast.testproblems` and docs/developing.md).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit, types
+from numba.extending import overload
+
+from .linalg import bordered_matvec, w_factor, w_solve
+from .model import jacobian_blocks, rhs, second_derivative_form
+from .params import P_ETA, P_ETAP, eta_prime
+
+__all__ = [
+    "StickSlip",
+    "StickSlipTangent",
+    "BorderedLinear",
+    "make_stickslip",
+    "make_tangent",
+    "alloc_bordered_linear",
+    "problem_f",
+    "problem_jac",
+    "problem_factor",
+    "problem_solve",
+    "problem_error_norm",
+    "problem_initial_step",
+    "error_norm",
+    "initial_step",
+]
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_OVL = dict(jit_options=_JIT)
+
+#: The model. ``p`` is the packed parameter array with eta' filled in.
+StickSlip = namedtuple("StickSlip", ["p", "n_osc", "dc"])
+#: The model with ``n_tangent`` tangent vectors; ``jb``, ``jcol``, ``jrow`` are
+#: scratch for J(y) u inside the right-hand side, ``unorm`` for the error norm.
+StickSlipTangent = namedtuple(
+    "StickSlipTangent",
+    ["p", "n_osc", "dc", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm"],
+)
+#: The bordered Jacobian at the last evaluation point and the factors of W.
+#: ``scal`` holds (corner, Schur complement); ``at`` the evaluation point and
+#: ``hv`` scratch (both used by the tangent problem only).
+BorderedLinear = namedtuple(
+    "BorderedLinear", ["blocks", "col", "row", "lu", "piv", "z", "scal", "at", "hv"]
+)
+
+
+def _is(typ, cls) -> bool:
+    return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is cls
+
+
+@njit(**_JIT)
+def make_stickslip(p: np.ndarray, n_osc: int, dc: bool, p_buf: np.ndarray) -> StickSlip:
+    """The model's record, with eta' derived from eta into ``p_buf`` (a copy of p)."""
+    for i in range(p.size):
+        p_buf[i] = p[i]
+    p_buf[P_ETAP] = eta_prime(p_buf[P_ETA])
+    return StickSlip(p_buf, n_osc, dc)
+
+
+@njit(**_JIT)
+def make_tangent(
+    p: np.ndarray, n_osc: int, dc: bool, n_tangent: int, tangent_atol: float, p_buf: np.ndarray
+) -> StickSlipTangent:
+    """The tangent problem's record (allocates its small scratch)."""
+    for i in range(p.size):
+        p_buf[i] = p[i]
+    p_buf[P_ETAP] = eta_prime(p_buf[P_ETA])
+    return StickSlipTangent(
+        p_buf, n_osc, dc, n_tangent, tangent_atol,
+        np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4)),
+        np.zeros(n_tangent),
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def alloc_bordered_linear(n_osc: int, n_total: int) -> BorderedLinear:
+    """A :class:`BorderedLinear` for N disks and a full state of size ``n_total``."""
+    n = 4 * n_osc + 1
+    return BorderedLinear(
+        np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4)),
+        np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4), dtype=np.int64), np.zeros((n_osc, 4)),
+        np.zeros(2), np.zeros(n_total), np.zeros(n),
+    )  # fmt: skip
+
+
+# ----------------------------------------------------------- default algorithms
+@njit(**_JIT)
+def error_norm(err: np.ndarray, y0: np.ndarray, y1: np.ndarray, rtol: float, atol: float) -> float:
+    """RMS norm of err scaled by atol + rtol max(|y0|, |y1|)."""
+    n = err.size
+    acc = 0.0
+    for i in range(n):
+        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        e = err[i] / sc
+        acc += e * e
+    return math.sqrt(acc / n)
+
+
+@njit(**_JIT)
+def initial_step(prob, y0, f0, rtol, atol, order, work, fwork) -> float:
+    """Hairer-Norsett-Wanner's starting step guess (II.4), one more RHS evaluation."""
+    n = y0.size
+    d0 = 0.0
+    d1 = 0.0
+    for i in range(n):
+        sc = atol + rtol * abs(y0[i])
+        d0 += (y0[i] / sc) ** 2
+        d1 += (f0[i] / sc) ** 2
+    d0 = math.sqrt(d0 / n)
+    d1 = math.sqrt(d1 / n)
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    for i in range(n):
+        work[i] = y0[i] + h0 * f0[i]
+    problem_f(prob, work, fwork)
+    d2 = 0.0
+    for i in range(n):
+        sc = atol + rtol * abs(y0[i])
+        d2 += ((fwork[i] - f0[i]) / sc) ** 2
+    d2 = math.sqrt(d2 / n) / h0
+    big = max(d1, d2)
+    if big <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / big) ** (1.0 / (order + 1.0))
+    return min(100.0 * h0, h1)
+
+
+# ------------------------------------------------------------ generic functions
+def problem_f(prob, y, out):  # noqa: ARG001 - resolved by overload
+    """f(y) into out."""
+
+
+def problem_jac(prob, y, lin):  # noqa: ARG001
+    """Evaluate the Jacobian at y into lin."""
+
+
+def problem_factor(prob, lin, sigma):  # noqa: ARG001
+    """Factor W = sigma I - J; False if singular."""
+
+
+def problem_solve(prob, lin, b):  # noqa: ARG001
+    """Solve W x = b in place."""
+
+
+def problem_error_norm(prob, err, y0, y1, rtol, atol):  # noqa: ARG001
+    """Error norm of a step."""
+
+
+def problem_initial_step(prob, y, f0, rtol, atol, order, work, fwork):  # noqa: ARG001
+    """Starting step size."""
+
+
+# ------------------------------------------------------------------- StickSlip
+@overload(problem_f, **_OVL)
+def _f(prob, y, out):
+    if _is(prob, StickSlip):
+
+        def impl(prob, y, out):
+            rhs(y, prob.p, prob.n_osc, prob.dc, out)
+
+        return impl
+    if _is(prob, StickSlipTangent):
+
+        def impl(prob, y, out):
+            n = 4 * prob.n_osc + (1 if prob.dc else 0)
+            rhs(y[:n], prob.p, prob.n_osc, prob.dc, out[:n])
+            corner = jacobian_blocks(
+                y[:n], prob.p, prob.n_osc, prob.dc, prob.jb, prob.jcol, prob.jrow
+            )
+            for j in range(1, prob.n_tangent + 1):
+                bordered_matvec(
+                    prob.jb, prob.jcol, prob.jrow, corner, prob.n_osc, prob.dc,
+                    y[j * n : (j + 1) * n], out[j * n : (j + 1) * n],
+                )  # fmt: skip
+
+        return impl
+
+
+@overload(problem_jac, **_OVL)
+def _jac(prob, y, lin):
+    if _is(prob, StickSlip):
+
+        def impl(prob, y, lin):
+            lin.scal[0] = jacobian_blocks(
+                y, prob.p, prob.n_osc, prob.dc, lin.blocks, lin.col, lin.row
+            )
+
+        return impl
+    if _is(prob, StickSlipTangent):
+
+        def impl(prob, y, lin):
+            n = 4 * prob.n_osc + (1 if prob.dc else 0)
+            lin.scal[0] = jacobian_blocks(
+                y[:n], prob.p, prob.n_osc, prob.dc, lin.blocks, lin.col, lin.row
+            )
+            for i in range(y.size):
+                lin.at[i] = y[i]
+
+        return impl
+
+
+@overload(problem_factor, **_OVL)
+def _factor(prob, lin, sigma):
+    if _is(prob, StickSlip) or _is(prob, StickSlipTangent):
+
+        def impl(prob, lin, sigma):
+            schur = w_factor(
+                sigma, lin.blocks, lin.col, lin.row, lin.scal[0], prob.n_osc, prob.dc,
+                lin.lu, lin.piv, lin.z,
+            )  # fmt: skip
+            lin.scal[1] = schur
+            return math.isfinite(schur)
+
+        return impl
+
+
+@overload(problem_solve, **_OVL)
+def _solve(prob, lin, b):
+    if _is(prob, StickSlip):
+
+        def impl(prob, lin, b):
+            w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, b)
+
+        return impl
+    if _is(prob, StickSlipTangent):
+
+        def impl(prob, lin, b):
+            # [[W, 0], [-H(u_j), W]] x = b: solve the state part, then each tangent part
+            n = 4 * prob.n_osc + (1 if prob.dc else 0)
+            ky = b[:n]
+            w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, ky)
+            hv = lin.hv[:n]
+            y0 = lin.at[:n]
+            for j in range(1, prob.n_tangent + 1):
+                ku = b[j * n : (j + 1) * n]
+                second_derivative_form(
+                    y0, lin.at[j * n : (j + 1) * n], ky, prob.p, prob.n_osc, prob.dc, hv
+                )
+                for i in range(n):
+                    ku[i] += hv[i]
+                w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, ku)
+
+        return impl
+
+
+@overload(problem_error_norm, **_OVL)
+def _error_norm(prob, err, y0, y1, rtol, atol):
+    if _is(prob, StickSlip):
+
+        def impl(prob, err, y0, y1, rtol, atol):
+            return error_norm(err, y0, y1, rtol, atol)
+
+        return impl
+    if _is(prob, StickSlipTangent):
+
+        def impl(prob, err, y0, y1, rtol, atol):
+            # y scaled by atol + rtol |y|; u_j by tangent_atol |u_j(t0)| + rtol |u_j|
+            n = 4 * prob.n_osc + (1 if prob.dc else 0)
+            k = prob.n_tangent
+            for j in range(1, k + 1):
+                un = 0.0
+                for r in range(j * n, (j + 1) * n):
+                    un += y0[r] * y0[r]
+                prob.unorm[j - 1] = math.sqrt(un)
+            acc = 0.0
+            for i in range(n):
+                sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+                e = err[i] / sc
+                acc += e * e
+                for j in range(1, k + 1):
+                    q = j * n + i
+                    sc = prob.tangent_atol * prob.unorm[j - 1] + rtol * max(abs(y0[q]), abs(y1[q]))
+                    e = err[q] / sc
+                    acc += e * e
+            return math.sqrt(acc * (1.0 / ((1.0 + k) * n)))
+
+        return impl
+
+
+@overload(problem_initial_step, **_OVL)
+def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
+    if _is(prob, StickSlip):
+
+        def impl(prob, y, f0, rtol, atol, order, work, fwork):
+            return initial_step(prob, y, f0, rtol, atol, order, work, fwork)
+
+        return impl
+    if _is(prob, StickSlipTangent):
+
+        def impl(prob, y, f0, rtol, atol, order, work, fwork):
+            # from the state part alone
+            n = 4 * prob.n_osc + (1 if prob.dc else 0)
+            base = StickSlip(prob.p, prob.n_osc, prob.dc)
+            return initial_step(base, y[:n], f0[:n], rtol, atol, order, work[:n], fwork[:n])
+
+        return impl

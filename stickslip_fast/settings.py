@@ -1,0 +1,309 @@
+"""Integration settings: one typed, validated, frozen record shared by simulate and sweep.
+
+:class:`Settings` is what the kernels are run with, and :meth:`Settings.to_dict`
+is the one mapping written into the configuration hash of a result file, its
+HDF5 attributes and the keys of Dask tasks.
+
+Adding a setting is one line in :class:`Settings`: a field with its default and
+its check, e.g. ``stop: str = _field("t_end", _choice(("t_end", "converged")),
+new=True)``. A field marked ``new=True`` is left out of :meth:`~Settings.to_dict`
+while it has its default, so files written before the field existed keep their
+configuration hash and still resume.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .trajectory import METHODS
+
+__all__ = [
+    "Settings",
+    "DEFAULT_RTOL",
+    "DEFAULT_ATOL",
+    "DEFAULT_EQUILIBRIUM_TOL",
+    "DEFAULT_MAX_STEPS",
+    "DEFAULT_DWELL",
+    "STOP_KINDS",
+    "MAX_RTOL",
+    "period_tolerance",
+    "check_real",
+    "check_integer",
+    "check_memory",
+    "memory_limit",
+]
+
+#: Default tolerances. Over the seven SciPy reference trajectories (presets,
+#: both drives, N = 1 and 2, 400-3000 time units with their transients) the
+#: Poincare points agree with Radau rtol=1e-10 to 1.8e-7 at worst
+#: (tests/test_scipy_crosscheck.py); rtol=1e-8 would give up to 2e-4 there.
+DEFAULT_RTOL = 1e-9
+DEFAULT_ATOL = 1e-11
+#: Largest accepted rtol. Above it the step control no longer resolves the
+#: stick-slip transitions (with rtol = 1 the P1 orbit at eta = 2 is called an
+#: equilibrium), and the period tolerance 1e4 rtol would exceed 100%.
+MAX_RTOL = 1e-2
+#: Period tolerance relative to rtol (see :func:`period_tolerance`).
+PERIOD_TOL_FACTOR = 1e4
+#: Disk speed (over the recording window) below which a run is at rest:
+#: ten times the friction law's smoothing width eps = 1e-5 of the presets.
+DEFAULT_EQUILIBRIUM_TOL = 1e-4
+DEFAULT_MAX_STEPS = 20_000_000
+#: Stop rules: run to t_end ("fixed"), or end once converged ("converged").
+STOP_KINDS = ("fixed", "converged")
+#: Converged stopping: how long the disks must stay at rest before a run ends
+#: as an equilibrium (about 15 periods of the slowest free oscillation, 2 pi sqrt(m)).
+DEFAULT_DWELL = 200.0
+
+
+def period_tolerance(rtol: float) -> float:
+    """Tolerance for repeated Poincare points: 1e4 rtol, at least 1e-9 (relative).
+
+    Points are accurate to roughly 100 rtol; the extra factor absorbs the last
+    bit of transient decay of orbits whose Floquet multipliers are close to 1.
+    """
+    return max(PERIOD_TOL_FACTOR * rtol, 1e-9)
+
+
+# ------------------------------------------------------------------ checks
+def check_real(
+    name: str,
+    value: Any,
+    *,
+    minimum: float = 0.0,
+    allow_equal: bool = False,
+    maximum: float = math.inf,
+) -> float:
+    """``value`` as a finite float in (minimum, maximum] (or [minimum, ...] with allow_equal).
+
+    Strings and booleans are rejected, not converted: ``t_end = "300"`` is an
+    error naming ``t_end``.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        raise ValueError(f"{name} must be a real number, got {value!r}")
+    value = float(value)
+    low_ok = value >= minimum if allow_equal else value > minimum
+    if not math.isfinite(value) or not low_ok:
+        raise ValueError(
+            f"{name} must be finite and {'>=' if allow_equal else '>'} {minimum:g}, got {value!r}"
+        )
+    if value > maximum:
+        raise ValueError(f"{name} must be <= {maximum:g}, got {value!r}")
+    return value
+
+
+def check_integer(name: str, value: Any, minimum: int) -> int:
+    """``value`` as an int >= minimum; an integral float (2.0, 1e6) is accepted, 2.7 is not."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    if isinstance(value, (float, np.floating)) and not float(value).is_integer():
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r} (not cut)")
+    if int(value) < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def memory_limit() -> int:
+    """Bytes of physical memory of this machine (the bound of :func:`check_memory`)."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return 2**62
+
+
+def check_memory(nbytes: float, what: str) -> None:
+    """Refuse work whose arrays would not fit in this machine's memory, before allocating.
+
+    Parameters
+    ----------
+    nbytes : float
+        Estimated bytes the work allocates.
+    what : str
+        What needs them, naming the arguments that set the size (for the message).
+    """
+    limit = memory_limit()
+    if nbytes > limit:
+        raise ValueError(
+            f"{what} would need about {nbytes / 2**30:.1f} GiB, more than this machine's "
+            f"{limit / 2**30:.1f} GiB of memory"
+        )
+
+
+def _positive(allow_zero: bool = False, maximum: float = math.inf) -> Callable[[str, Any], float]:
+    def check(name: str, value: Any) -> float:
+        return check_real(name, value, allow_equal=allow_zero, maximum=maximum)
+
+    return check
+
+
+def _integer(minimum: int) -> Callable[[str, Any], int]:
+    def check(name: str, value: Any) -> int:
+        return check_integer(name, value, minimum)
+
+    return check
+
+
+def _choice(options: tuple[str, ...]) -> Callable[[str, Any], str]:
+    def check(name: str, value: Any) -> str:
+        if not isinstance(value, str) or value not in options:
+            raise ValueError(f"{name} must be one of {options}, got {value!r}")
+        return value
+
+    return check
+
+
+def _field(default: Any, check: Callable[[str, Any], Any], *, new: bool = False) -> Any:
+    """A settings field: its default, its check and whether it post-dates schema 1 files."""
+    return dataclasses.field(default=default, metadata={"check": check, "new": new})
+
+
+_REQUIRED = dataclasses.MISSING
+
+
+# ---------------------------------------------------------------- the record
+@dataclass(frozen=True, kw_only=True)
+class Settings:
+    """Validated integration settings (see :func:`stickslip_fast.simulate` for each).
+
+    Build one with :meth:`resolve`, which fills the defaults that depend on
+    other fields (``None`` means "default"); the constructor itself takes every
+    value explicitly and validates it. ``h = 0.0`` means "no fixed step".
+
+    Attributes
+    ----------
+    method : str
+        One of :data:`~stickslip_fast.METHODS`.
+    t_end, t_transient : float
+        Final time (> 0) and start of the recording window (>= 0, < t_end).
+    rtol, atol : float
+        Tolerances (> 0; rtol <= :data:`MAX_RTOL`).
+    h : float
+        Fixed step, 0.0 for the adaptive methods.
+    max_points : int
+        Points kept per trajectory (>= 0; 0 records none and detects no period).
+    max_steps : int
+        Step budget (>= 1).
+    equilibrium_tol, period_tol : float
+        Classification tolerances (> 0).
+    stop : str
+        "fixed" (run to t_end) or "converged" (end once converged; see
+        :func:`stickslip_fast.simulate`).
+    dwell : float
+        Converged stopping: time at rest before a run ends as an equilibrium.
+    """
+
+    method: str = _field("rodas5p", _choice(METHODS))
+    t_end: float = _field(_REQUIRED, _positive())
+    t_transient: float = _field(0.0, _positive(allow_zero=True))
+    rtol: float = _field(DEFAULT_RTOL, _positive(maximum=MAX_RTOL))
+    atol: float = _field(DEFAULT_ATOL, _positive())
+    h: float = _field(0.0, _positive(allow_zero=True))
+    max_points: int = _field(1000, _integer(0))
+    max_steps: int = _field(DEFAULT_MAX_STEPS, _integer(1))
+    equilibrium_tol: float = _field(DEFAULT_EQUILIBRIUM_TOL, _positive())
+    period_tol: float = _field(period_tolerance(DEFAULT_RTOL), _positive())
+    stop: str = _field("fixed", _choice(STOP_KINDS), new=True)
+    dwell: float = _field(DEFAULT_DWELL, _positive(), new=True)
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, f.metadata["check"](f.name, getattr(self, f.name)))
+        if self.t_transient >= self.t_end:
+            raise ValueError(f"t_transient ({self.t_transient}) must be < t_end ({self.t_end})")
+        if self.method == "dopri5-fixed" and self.h == 0.0:
+            raise ValueError("method 'dopri5-fixed' needs a step size h")
+        if self.method == "dopri5" and self.h != 0.0:
+            raise ValueError("h is not used by the adaptive 'dopri5'; use 'dopri5-fixed'")
+        if self.stop != "converged" and self.dwell != DEFAULT_DWELL:
+            raise ValueError("dwell is only used with stop='converged'")
+
+    @classmethod
+    def resolve(
+        cls,
+        method: str = "rodas5p",
+        t_end: float | None = None,
+        t_transient: float = 0.0,
+        rtol: float | None = None,
+        atol: float | None = None,
+        h: float | None = None,
+        max_points: int = 1000,
+        max_steps: int | None = None,
+        equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
+        period_tol: float | None = None,
+        **extra: Any,
+    ) -> Settings:
+        """Complete and validate settings; ``None`` takes the default.
+
+        Defaults that depend on other fields: ``period_tol`` is
+        :func:`period_tolerance` of ``rtol``; with a fixed step ``h``,
+        ``max_steps`` is the number of steps to ``t_end`` plus one.
+        ``extra`` are further fields (``None`` again means the default).
+        """
+        if t_end is None:
+            raise ValueError("t_end is required")
+        if method not in METHODS:  # before h, so a wrong name is reported as such
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        rtol = DEFAULT_RTOL if rtol is None else check_real("rtol", rtol, maximum=MAX_RTOL)
+        if method == "dopri5-fixed" and h is None:
+            raise ValueError("method 'dopri5-fixed' needs a step size h")
+        if h is not None:
+            if method == "dopri5":
+                raise ValueError("h is not used by the adaptive 'dopri5'; use 'dopri5-fixed'")
+            h = check_real("h", h)
+            if max_steps is None:
+                max_steps = math.ceil(check_real("t_end", t_end) / h) + 1
+        return cls(
+            method=method,
+            t_end=t_end,
+            t_transient=t_transient,
+            rtol=rtol,
+            atol=DEFAULT_ATOL if atol is None else atol,
+            h=0.0 if h is None else h,
+            max_points=max_points,
+            max_steps=DEFAULT_MAX_STEPS if max_steps is None else max_steps,
+            equilibrium_tol=equilibrium_tol,
+            period_tol=period_tolerance(rtol) if period_tol is None else period_tol,
+            **{k: v for k, v in extra.items() if v is not None},
+        )
+
+    @classmethod
+    def from_dict(cls, values: dict[str, Any]) -> Settings:
+        """Rebuild settings from :meth:`to_dict` output (e.g. a file's configuration)."""
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ValueError(f"unknown setting(s) {unknown}; known: {sorted(known)}")
+        return cls(**values)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The settings as plain Python values: for the config hash, file attributes, task keys.
+
+        Fields marked new are omitted while at their default, so that a file
+        written before they existed keeps its configuration hash.
+        """
+        return {
+            f.name: getattr(self, f.name)
+            for f in dataclasses.fields(self)
+            if not (f.metadata["new"] and getattr(self, f.name) == f.default)
+        }
+
+    def __getitem__(self, name: str) -> Any:
+        """``settings["rtol"]``: read access as for the plain dict used before."""
+        if name not in self.to_dict():
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def replace(self, **changes: Any) -> Settings:
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)

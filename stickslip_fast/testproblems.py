@@ -1,0 +1,185 @@
+"""Standard test problems with known solutions, as problem records for the generic steppers.
+
+They check the steppers and the driver apart from the stick-slip model
+(tests/test_steppers.py), and they are the worked example of how to add a
+problem: a namedtuple record, a linear workspace (:class:`DenseLinear`), and one
+``overload`` of each generic function of :mod:`stickslip_fast.problems`.
+
+:class:`LinearProblem`
+    y' = A y; exact solution expm(A t) y0.
+:class:`Kaps`
+    y1' = -(2 + 1/eps) y1 + y2^2 / eps, y2' = y1 - y2 - y2^2; from (1, 1) the
+    exact solution is y1 = exp(-2t), y2 = exp(-t) for every eps (stiff for
+    small eps).
+:class:`ProtheroRobinson`
+    y' = lam (y - sin t) + cos t, made autonomous with z = (y, t); from
+    (0, 0) the exact solution is y = sin t (stiff for lam << -1). Methods
+    that lose order on it show order reduction.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit, types
+from numba.extending import overload
+
+from .driver import STOP_AT_END, Controls, PoincareObserver, Section, drive, simple_stop
+from .linalg import dense_w_factor, dense_w_solve
+from .problems import (
+    error_norm,
+    initial_step,
+    problem_error_norm,
+    problem_f,
+    problem_factor,
+    problem_initial_step,
+    problem_jac,
+    problem_solve,
+)
+from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, alloc_workspace
+
+__all__ = ["LinearProblem", "Kaps", "ProtheroRobinson", "DenseLinear", "solve_test_problem"]
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_OVL = dict(jit_options=_JIT)
+
+LinearProblem = namedtuple("LinearProblem", ["A"])
+Kaps = namedtuple("Kaps", ["eps"])
+ProtheroRobinson = namedtuple("ProtheroRobinson", ["lam"])
+#: Dense Jacobian, its W = sigma I - J factors and pivots.
+DenseLinear = namedtuple("DenseLinear", ["jac", "lu", "piv"])
+
+_RECORDS = (LinearProblem, Kaps, ProtheroRobinson)
+
+
+def _which(typ):
+    if isinstance(typ, types.BaseNamedTuple) and typ.instance_class in _RECORDS:
+        return typ.instance_class
+    return None
+
+
+@overload(problem_f, **_OVL)
+def _f(prob, y, out):
+    cls = _which(prob)
+    if cls is LinearProblem:
+
+        def impl(prob, y, out):
+            n = y.size
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += prob.A[i, j] * y[j]
+                out[i] = acc
+
+        return impl
+    if cls is Kaps:
+
+        def impl(prob, y, out):
+            out[0] = -(2.0 + 1.0 / prob.eps) * y[0] + y[1] * y[1] / prob.eps
+            out[1] = y[0] - y[1] - y[1] * y[1]
+
+        return impl
+    if cls is ProtheroRobinson:
+
+        def impl(prob, y, out):
+            out[0] = prob.lam * (y[0] - math.sin(y[1])) + math.cos(y[1])
+            out[1] = 1.0
+
+        return impl
+
+
+@overload(problem_jac, **_OVL)
+def _jac(prob, y, lin):
+    cls = _which(prob)
+    if cls is LinearProblem:
+
+        def impl(prob, y, lin):
+            lin.jac[:, :] = prob.A
+
+        return impl
+    if cls is Kaps:
+
+        def impl(prob, y, lin):
+            lin.jac[0, 0] = -(2.0 + 1.0 / prob.eps)
+            lin.jac[0, 1] = 2.0 * y[1] / prob.eps
+            lin.jac[1, 0] = 1.0
+            lin.jac[1, 1] = -1.0 - 2.0 * y[1]
+
+        return impl
+    if cls is ProtheroRobinson:
+
+        def impl(prob, y, lin):
+            lin.jac[0, 0] = prob.lam
+            lin.jac[0, 1] = -prob.lam * math.cos(y[1]) - math.sin(y[1])
+            lin.jac[1, 0] = 0.0
+            lin.jac[1, 1] = 0.0
+
+        return impl
+
+
+@overload(problem_factor, **_OVL)
+def _factor(prob, lin, sigma):
+    if _which(prob) is not None:
+        return lambda prob, lin, sigma: dense_w_factor(sigma, lin.jac, lin.lu, lin.piv)
+
+
+@overload(problem_solve, **_OVL)
+def _solve(prob, lin, b):
+    if _which(prob) is not None:
+        return lambda prob, lin, b: dense_w_solve(lin.lu, lin.piv, b)
+
+
+@overload(problem_error_norm, **_OVL)
+def _error_norm(prob, err, y0, y1, rtol, atol):
+    if _which(prob) is not None:
+        return lambda prob, err, y0, y1, rtol, atol: error_norm(err, y0, y1, rtol, atol)
+
+
+@overload(problem_initial_step, **_OVL)
+def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
+    if _which(prob) is not None:
+
+        def impl(prob, y, f0, rtol, atol, order, work, fwork):
+            return initial_step(prob, y, f0, rtol, atol, order, work, fwork)
+
+        return impl
+
+
+@njit(**_JIT)
+def _solve_with(method, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort):
+    n = y.size
+    lin = DenseLinear(np.zeros((n, n)), np.zeros((n, n)), np.zeros(n, dtype=np.int64))
+    obs = PoincareObserver(
+        Section(0, True), 0.0, np.empty((0, n)), np.empty(0), np.empty((0, n)), 1.0,
+        np.empty(n), np.empty(n), np.zeros(2, dtype=np.int64),
+    )  # fmt: skip
+    istat = np.zeros(2, dtype=np.int64)
+    fstat = np.zeros(1)
+    st = drive(
+        method, prob, lin, alloc_workspace(method, n), y, t_end,
+        Controls(rtol, atol, h_fixed, max_steps), obs, simple_stop(STOP_AT_END, 0, 0), abort,
+        istat, fstat,
+    )  # fmt: skip
+    return st, istat[0], istat[1], fstat[0]
+
+
+@njit(**_JIT)
+def solve_test_problem(rosenbrock, prob, y0, t_end, rtol, atol, h_fixed, max_steps):
+    """Integrate a test problem with Rodas5P (``rosenbrock``) or DOPRI5 on the driver.
+
+    Returns (final state, status, accepted steps, rejected steps, final time).
+    ``h_fixed`` > 0 takes fixed steps.
+    """
+    y = y0.copy()
+    abort = np.zeros(1, dtype=np.int64)
+    if rosenbrock:
+        st, ns, nr, t = _solve_with(
+            RODAS5P_METHOD, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort
+        )
+    else:
+        st, ns, nr, t = _solve_with(
+            DOPRI5_METHOD, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort
+        )
+    return y, st, ns, nr, t

@@ -1,0 +1,94 @@
+"""The model with its variational equations on the one driver: flows of tangent vectors.
+
+:func:`propagate_tangents` integrates y' = f(y) together with k tangent vectors
+u_j' = J(y) u_j (the problem :class:`problems.StickSlipTangent`) with Rodas5P
+and the analytic Jacobian. With U(0) = I it returns the state-transition
+matrix Phi(t) = dy(t)/dy(0), from which monodromy matrices and the Jacobian of
+the Poincare return map follow. The largest Lyapunov exponent
+(:mod:`stickslip_fast.lyapunov`) runs the same problem on the same driver with
+k = 1 and a renormalising observer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .driver import (
+    STOP_AFTER_CROSSINGS,
+    STOP_AT_END,
+    Controls,
+    PoincareObserver,
+    drive,
+    simple_stop,
+)
+from .params import N_PARAMS
+from .problems import alloc_bordered_linear, make_tangent
+from .steppers import RODAS5P_METHOD, alloc_workspace
+from .trajectory import X1_MINIMA
+
+__all__ = ["propagate_tangents"]
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+
+
+@njit(**_JIT)
+def propagate_tangents(
+    y0: np.ndarray,
+    U0: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    t_end: float,
+    n_crossings: int,
+    rtol: float,
+    atol: float,
+    tangent_atol: float,
+    max_steps: int,
+    abort: np.ndarray,
+):
+    """Integrate y and the k columns of U0 (n x k) to ``t_end`` or a section crossing.
+
+    With ``n_crossings`` > 0 the run stops at the step that completes the
+    ``n_crossings``-th upward crossing of dx1 = 0 (t > 0), and the augmented
+    state *at* that crossing is returned, from the dense output. Otherwise it
+    runs to ``t_end``.
+
+    Returns
+    -------
+    (status, y, U, t): the driver's status code, the state (n,), the tangent
+    vectors (n, k) and the time, at the last crossing (``n_crossings`` > 0,
+    t = NaN if it was not reached) or at the final time.
+    """
+    n = y0.size
+    k = U0.shape[1]
+    m = n * (1 + k)
+    prob = make_tangent(p, n_osc, dc, k, tangent_atol, np.empty(N_PARAMS))
+    y = np.empty(m)
+    for i in range(n):
+        y[i] = y0[i]
+        for j in range(k):
+            y[(j + 1) * n + i] = U0[i, j]
+    cap = 1 if n_crossings > 0 else 0
+    obs = PoincareObserver(
+        X1_MINIMA, 0.0, np.full((cap, m), np.nan), np.full(cap, np.nan), np.empty((0, m)), 1.0,
+        np.empty(m), np.empty(m), np.zeros(2, dtype=np.int64),
+    )  # fmt: skip
+    stop = simple_stop(STOP_AFTER_CROSSINGS if n_crossings > 0 else STOP_AT_END, n_crossings, 0)
+    istat = np.zeros(2, dtype=np.int64)
+    fstat = np.zeros(1)
+    status = drive(
+        RODAS5P_METHOD, prob, alloc_bordered_linear(n_osc, m), alloc_workspace(RODAS5P_METHOD, m),
+        y, t_end, Controls(rtol, atol, 0.0, max_steps), obs, stop, abort, istat, fstat,
+    )  # fmt: skip
+    src = y
+    t = fstat[0]
+    if n_crossings > 0:
+        src = obs.pts[0]
+        t = obs.tpts[0] if obs.counts[0] >= n_crossings else np.nan
+    y_out = src[:n].copy()
+    U = np.empty((n, k))
+    for i in range(n):
+        for j in range(k):
+            U[i, j] = src[(j + 1) * n + i]
+    return status, y_out, U, t

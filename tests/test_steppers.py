@@ -1,0 +1,121 @@
+"""The generic steppers and the driver on standard problems with known solutions.
+
+References are analytic: expm(A t) for a linear system, exp(-2t)/exp(-t) for
+Kaps' problem, sin t for Prothero-Robinson; orders are the methods' published
+ones (Dormand-Prince 5, Rodas5P 5).
+"""
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from stickslip_fast import System
+from stickslip_fast.status import STATUS_NAMES
+from stickslip_fast.testproblems import Kaps, LinearProblem, ProtheroRobinson, solve_test_problem
+from stickslip_fast.variational import propagate_tangents
+
+A_OSC = np.array([[0.0, 1.0], [-1.0, -0.1]])
+
+
+def _fixed(rosen, prob, y0, t_end, n):
+    y, st, ns, nr, t = solve_test_problem(
+        rosen, prob, np.asarray(y0, float), t_end, 1e-6, 1e-8, t_end / n, 10 * n
+    )
+    assert (
+        STATUS_NAMES[st] == "ok" and ns in (n, n + 1) and nr == 0 and t == t_end
+    )  # n + 1: a round-off sliver
+    return y
+
+
+def _order(hs, errs):
+    return np.polyfit(np.log(hs), np.log(errs), 1)[0]
+
+
+@pytest.mark.parametrize("rosen", [True, False])
+def test_nonstiff_kaps_fixed_step_order_5(rosen):
+    # eps = 1: Kaps' problem is nonlinear and non-stiff, exact solution (exp(-2t), exp(-t))
+    prob = Kaps(1.0)
+    exact = np.exp([-4.0, -2.0])
+    ns = [10, 20, 40, 80]
+    errs = [np.abs(_fixed(rosen, prob, [1.0, 1.0], 2.0, n) - exact).max() for n in ns]
+    assert abs(_order(2.0 / np.array(ns), errs) - 5.0) < 0.4, errs
+
+
+def test_prothero_robinson_order_and_stiff_accuracy():
+    # mildly stiff (h lam from -10 to -1.25): full order 5
+    ns = [10, 20, 40, 80]
+    errs = [
+        abs(_fixed(True, ProtheroRobinson(-50.0), [0.0, 0.0], 2.0, n)[0] - np.sin(2.0)) for n in ns
+    ]
+    assert abs(_order(2.0 / np.array(ns[1:]), errs[1:]) - 5.0) < 0.5, errs
+    # very stiff (h lam down to -2e5): stable and accurate at every step size
+    errs = [
+        abs(_fixed(True, ProtheroRobinson(-1e6), [0.0, 0.0], 2.0, n)[0] - np.sin(2.0)) for n in ns
+    ]
+    assert max(errs) < 1e-10 and errs == sorted(errs, reverse=True), errs
+
+
+def test_kaps_very_stiff_adaptive_accuracy_and_cost():
+    prob = Kaps(1e-8)
+    y, st, ns, nr, t = solve_test_problem(
+        True, prob, np.array([1.0, 1.0]), 1.0, 1e-8, 1e-10, 0.0, 10**6
+    )
+    assert STATUS_NAMES[st] == "ok" and t == 1.0
+    np.testing.assert_allclose(y, [np.exp(-2.0), np.exp(-1.0)], rtol=1e-7)
+    assert ns < 300  # stiffness costs the implicit method nothing
+    # the explicit method is held to tiny steps by stability alone
+    _, st, ns, _, t = solve_test_problem(
+        False, prob, np.array([1.0, 1.0]), 1.0, 1e-8, 1e-10, 0.0, 20000
+    )
+    assert STATUS_NAMES[st] == "max-steps" and t < 1e-3
+
+
+def test_adaptive_linear_tolerance_honoured():
+    prob = LinearProblem(A_OSC)
+    exact = expm(A_OSC * 20.0) @ np.array([1.0, 0.0])
+    for rosen in (True, False):
+        y, st, ns, nr, _ = solve_test_problem(
+            rosen, prob, np.array([1.0, 0.0]), 20.0, 1e-10, 1e-12, 0.0, 10**6
+        )
+        assert STATUS_NAMES[st] == "ok"
+        assert np.abs(y - exact).max() < 1e-8
+
+
+def test_kernel_rules_nan_and_bounded_rejections():
+    # a problem that is NaN from the start ends at once, classified, never loops
+    y, st, ns, nr, _ = solve_test_problem(
+        True, Kaps(np.nan), np.array([1.0, 1.0]), 1.0, 1e-8, 1e-10, 0.0, 100
+    )
+    assert STATUS_NAMES[st] == "nonfinite" and ns == 0 and nr <= 100
+    # rejected steps are bounded by max_steps too (here every step is rejected)
+    y, st, ns, nr, _ = solve_test_problem(
+        False, Kaps(1e-300), np.array([1.0, 1.0]), 1.0, 1e-8, 1e-10, 0.0, 50
+    )
+    assert STATUS_NAMES[st] in ("max-steps", "nonfinite", "step-underflow") and nr <= 50
+
+
+def test_state_transition_matrix_of_linear_model_is_expm():
+    # mu = 0 removes friction from a constant-belt disk: y' = J y, so Phi(t) = expm(J t)
+    from stickslip_fast.model import dense_jacobian
+
+    s = System(mu=0.0, k12=-0.8, c=0.05, c12=0.01, m=2.0)
+    p = s.to_array()
+    n = s.n_state
+    y0 = np.linspace(0.1, 0.3, n)
+    jac = dense_jacobian(y0, p, 1, s.is_dc_motor)
+    st, y, U, t = propagate_tangents(
+        y0,
+        np.eye(n),
+        p,
+        1,
+        s.is_dc_motor,
+        7.0,
+        0,
+        1e-11,
+        1e-13,
+        1e-12,
+        10**6,
+        np.zeros(1, np.int64),
+    )
+    assert STATUS_NAMES[st] == "ok" and t == 7.0
+    np.testing.assert_allclose(U, expm(jac * 7.0), atol=1e-8)
