@@ -367,6 +367,8 @@ def classify_census(
                 pts = final[i, j][None, :]
             else:
                 continue  # failed, no crossings, or not computed: label -1
+            if not np.all(np.isfinite(pts)):
+                continue  # (cannot happen for a computed run; never group NaN)
             for g in groups:
                 if g[0] != kind or g[1] != p:
                     continue

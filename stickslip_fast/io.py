@@ -962,7 +962,9 @@ def read_census(path: str | Path) -> dict[str, Any]:
         out["values"] = h5[param][...]
         out["starts"] = h5["initial_state"][...]
         out["state_names"] = [s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]]
-        for name in ("points", "final_state", "done", "label", *CENSUS_RUN_FIELDS):
+        # done first: a run flagged done then has all its data flushed (the writer
+        # sets done after the data), even while a census is appending to the file
+        for name in ("done", "points", "final_state", "label", *CENSUS_RUN_FIELDS):
             out[name] = h5[name][...]
         if "t_converged" in h5:
             out["t_converged"] = h5["t_converged"][...]
