@@ -31,7 +31,9 @@ def test_a_failing_value_never_corrupts_its_neighbours():
             if k == 1:
                 continue
             # every other value equals its own single run, bit for bit
-            ref = ssf.simulate(ssf.System.preset("asymmetric", eta=2.0, mu=mu), 300.0, 200.0, max_points=256)
+            ref = ssf.simulate(
+                ssf.System.preset("asymmetric", eta=2.0, mu=mu), 300.0, 200.0, max_points=256
+            )
             assert r.status[k] == ref.status == "ok" and r.n_steps[k] == ref.n_steps > 0
             assert r.period[k] == ref.period
         # the absurd value is computed and classified, whatever its outcome
@@ -65,7 +67,7 @@ def test_eps_1e103_ends_within_max_steps():
     r = ssf.simulate(s, 300.0, 200.0, y0=[0.01, 0, 0, 0], max_steps=1000)
     assert r.status in ("nonfinite", "step-underflow", "max-steps")
     assert r.n_steps + r.n_rejected <= 2000
-    r = ssf.sweep(ASYM, "eps", [1e-5, 1e103], max_steps=10_000, **KW)
+    r = ssf.sweep(ASYM, "eps", [1e-5, 1e103], max_steps=100_000, **KW)
     assert r.status[0] == "ok" and r.status[1] in FAILURE_STATUSES
     assert time.perf_counter() - t0 < 120  # generous: only a hang can fail this
 
@@ -75,7 +77,8 @@ def test_continuation_continues_from_the_last_good_state():
     cont = ssf.sweep(ASYM, "c", cs, mode="continuation", **KW)
     rest = ssf.sweep(ASYM, "c", cs, mode="restart", **KW)
     assert cont.status[0] in FAILURE_STATUSES  # negative damping blows up
-    assert list(cont.status[1:]) == list(rest.status[1:]) == ["ok", "ok", "ok"]
+    # the classification of the later values is the restart one (c = 0.02 damps to rest)
+    assert list(cont.status[1:]) == list(rest.status[1:]) == ["ok", "ok", "equilibrium"]
     # the first good value started from y0 again, like restart mode
     assert cont.n_steps[1] == rest.n_steps[1]
     np.testing.assert_array_equal(cont.points[1], rest.points[1])
