@@ -112,3 +112,18 @@ def test_ctrl_c_stops_compiled_work_promptly(what, tmp_path):
     waited = time.perf_counter() - sent
     assert "KeyboardInterrupt" in err and "SystemError" not in err
     assert waited < 10.0, waited  # within about a second on a quiet machine
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
+def test_ctrl_c_on_cli_simulate_says_interrupted_and_exits_130():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "stickslip_fast.cli", "simulate", "--preset", "literature",
+         "--t-end", "5e6", "--max-points", "10"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    time.sleep(10.0)
+    assert proc.poll() is None
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err.strip().splitlines()[-1] == "stickslip-fast: interrupted", err
