@@ -5,7 +5,8 @@ Models the coupled translational-rotational disks-on-belts system of Kudra et al
 a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
-Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`.
+Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`,
+:func:`census`.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
+from .census import CensusResult, census, load_census
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
@@ -36,6 +38,9 @@ __all__ = [
     "sweep",
     "SweepResult",
     "load_sweep",
+    "census",
+    "CensusResult",
+    "load_census",
     "MODES",
     "largest_lyapunov",
     "LyapunovResult",
