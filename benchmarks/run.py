@@ -18,6 +18,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import (  # noqa: E402
+    converged,
     peer_diagram,
     peer_precision,
     profile_kernel,
@@ -38,6 +39,7 @@ SECTIONS = (
     "peers_trajectory",
     "peers_diagram",
     "kernel_profile",
+    "converged_stopping",
 )
 
 
@@ -97,6 +99,7 @@ def main(argv=None):
         ("peers_trajectory", lambda: peer_precision.run(mode, log)),
         ("peers_diagram", lambda: peer_diagram.run(mode, log)),
         ("kernel_profile", lambda: profile_kernel.run(mode, log)),
+        ("converged_stopping", lambda: converged.run(mode, log)),
     ]
     failed = []
     for name, fn in plan:
