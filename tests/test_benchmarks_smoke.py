@@ -44,7 +44,13 @@ def test_quick_benchmark_suite(tmp_path):
         "peers_trajectory",
         "peers_diagram",
         "kernel_profile",
+        "converged_stopping",
     }
+    conv = sec["converged_stopping"]
+    # converged stopping on Fig. 6 gives the fixed window's status and period
+    # (docs/converged.md: 100 of 100 values on this diagram)
+    assert conv["n_values"] == 60 and conv["agree_status_period"] == 60
+    assert conv["steps_converged"] < conv["steps_fixed"]
     wp = sec["work_precision"]
     assert set(wp["trajectories"]) == {
         "asymmetric_eta2.0",
