@@ -18,6 +18,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
+from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
@@ -42,6 +43,10 @@ __all__ = [
     "phases_from_events",
     "SyncResult",
     "sync_error",
+    "find_orbit",
+    "Orbit",
+    "find_equilibrium",
+    "Equilibrium",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",
