@@ -110,6 +110,35 @@ def test_orbit_matches_independent_scipy_shooting(case):
     assert abs(o.multipliers[0] - ref_mult[0]) < 1e-5
 
 
+def test_dc_motor_orbit_reproduces_brute_force():
+    s = ssf.System.preset("asymmetric", drive="dc-motor", eta=1.5)
+    r = ssf.simulate(s, 20000, stop="converged")
+    o = ssf.find_orbit(s, r)
+    assert o.converged and o.period == r.period == 1 and o.residual <= 1e-10 and o.stable
+    b = ssf.simulate(s, 30 * o.T, y0=r.final_state, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(o.points[0], b.poincare[-1], rtol=0, atol=1e-8)
+    assert o.multipliers.shape == (4,)
+
+
+def test_unstable_multiplier_matches_brute_force_growth():
+    # Two identical disks on one DC motor, started from rest, stay synchronised (x1 = x2, ...):
+    # brute force converges to a period-2 orbit inside that invariant subspace, which is
+    # unstable across it. An antisymmetric perturbation of 1e-11 grows by the leading
+    # multiplier per period, measured here from the simulated Poincare points.
+    s = ssf.System.preset("asymmetric", drive="dc-motor", eta=8.0, n_oscillators=2)
+    r = ssf.simulate(s, 20000, stop="converged")
+    o = ssf.find_orbit(s, r)
+    assert o.converged and o.period == 2 and o.residual <= 1e-10
+    assert not o.stable and o.multipliers[0].real > 2.0
+    y0 = o.points[0].copy()
+    y0[0] += 1e-11
+    y0[4] -= 1e-11
+    b = ssf.simulate(s, 20 * o.T, y0=y0, rtol=1e-12, atol=1e-14, max_points=100)
+    d = np.abs(b.poincare[:, 0] - b.poincare[:, 4])
+    growth = np.median(d[16:25] / d[14:23])  # linear regime, the stable directions decayed
+    assert abs(o.multipliers[0] - growth) < 2e-4
+
+
 def test_linear_oscillator_return_map_is_analytic():
     # mu = 0, no coupling: x'' + c x' + x = 0 and m phi'' + c phi' + phi = 0. From a minimum of
     # x the next one is T = 2 pi / w_d later, x -> x exp(-c T / 2), and (phi, dphi) moves by the
@@ -137,6 +166,9 @@ def test_failures_are_reported_never_silent(converged):
     # asking for period 2 on the period-1 orbit: a fixed point, but not of the period asked
     o2 = ssf.find_orbit(s, r, 2)
     assert o2.status == "lower-period" and not o2.converged and not o2.stable
+    # no crossing within t_max (a period is 9.6): the map cannot be evaluated
+    o3 = ssf.find_orbit(s, r, 1, t_max=1.0)
+    assert o3.status == "integration-failed" and not o3.converged and np.isnan(o3.T)
 
 
 def test_period_detected_from_a_state():
