@@ -18,6 +18,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
+from .continuation import Bifurcation, Branch, continue_orbit
 from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
@@ -47,6 +48,9 @@ __all__ = [
     "Orbit",
     "find_equilibrium",
     "Equilibrium",
+    "continue_orbit",
+    "Branch",
+    "Bifurcation",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",
