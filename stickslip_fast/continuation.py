@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .orbits import SECTION_INDEX, Orbit, return_map
+from .orbits import EQUILIBRIUM_SPEED, SECTION_INDEX, Orbit, _field, return_map
 from .system import SWEEPABLE
 
 __all__ = ["Branch", "Bifurcation", "continue_orbit", "pseudo_arclength", "BRANCH_SCHEMA"]
@@ -456,7 +456,11 @@ def continue_orbit(
     def jump(x_old, x_new):
         t_old = periods.get(x_old.tobytes(), math.nan)
         t_new = periods.get(x_new.tobytes(), math.nan)
-        return not abs(t_new - t_old) <= 0.05 * t_old
+        if not abs(t_new - t_old) <= 0.05 * t_old:
+            return True
+        # a rest point is a fixed point of the map too (near a stable focus): not the branch
+        f = _field(system_at(x_new[-1]), full(x_new))
+        return bool(np.max(np.abs(f)) < EQUILIBRIUM_SPEED)
 
     x0 = np.r_[orbit.points[0][mask], lam0]
     evaluate(x0)

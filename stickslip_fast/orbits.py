@@ -57,6 +57,9 @@ __all__ = [
 
 #: Index of the section coordinate dx1 in the state.
 SECTION_INDEX = 1
+#: A fixed point of the map where max |f| is below this is a rest point, not an orbit: near
+#: a stable focus the return map contracts onto the equilibrium, which it leaves fixed.
+EQUILIBRIUM_SPEED = 1e-8
 
 #: Outcomes of :func:`find_orbit` (``Orbit.status``).
 ORBIT_STATUSES = (
@@ -64,6 +67,7 @@ ORBIT_STATUSES = (
     "max-iter",  # max_iter Newton steps without reaching tol
     "no-progress",  # the damped step could not reduce the residual
     "lower-period",  # converged, but the points repeat with a divisor of the period asked for
+    "equilibrium",  # converged onto a rest point (|f| ~ 0 there), not an orbit
     "integration-failed",  # the return map could not be evaluated at the start
 )
 
@@ -460,7 +464,11 @@ def find_orbit(
     if status == "converged":
         # points in time order from z: z, then crossings 1..p-1
         q = _minimal_period(np.vstack([z, pts[:-1]]), tol)
-        if q < period:
+        speed = float(np.max(np.abs(_field(system, z))))
+        if speed < EQUILIBRIUM_SPEED:
+            status = "equilibrium"
+            message = f"converged onto a rest point (max |f| = {speed:.2g}): use find_equilibrium"
+        elif q < period:
             status = "lower-period"
             message = f"converged onto an orbit of period {q}, a divisor of period={period}"
     return _orbit(system, period, z, pts, times, jac, res, it, status, message, history)

@@ -166,6 +166,10 @@ def test_failures_are_reported_never_silent(converged):
     # asking for period 2 on the period-1 orbit: a fixed point, but not of the period asked
     o2 = ssf.find_orbit(s, r, 2)
     assert o2.status == "lower-period" and not o2.converged and not o2.stable
+    # near the stable sliding equilibrium the map contracts onto it: a fixed point, not an orbit
+    eq = ssf.find_equilibrium(s)
+    o4 = ssf.find_orbit(s, eq.state + [-1e-4, 0.0, 0.0, 0.0], 1)
+    assert o4.status == "equilibrium" and not o4.converged and not o4.stable
     # no crossing within t_max (a period is 9.6): the map cannot be evaluated
     o3 = ssf.find_orbit(s, r, 1, t_max=1.0)
     assert o3.status == "integration-failed" and not o3.converged and np.isnan(o3.T)
