@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from typing import Any
 
@@ -79,10 +80,33 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-points", dest="max_points", type=int)
 
 
+def _check_writable(path: str, what: str) -> None:
+    """Fail now, with one line naming the path, if ``path`` cannot be written later."""
+    from pathlib import Path
+
+    from .io import _make_parent
+
+    p = Path(path)
+    if p.is_dir():
+        raise IsADirectoryError(f"{what} {p} is a directory; give a file name")
+    if what == "--save":  # np.savez does not create folders
+        if not p.parent.is_dir():
+            raise FileNotFoundError(f"cannot write {what} {p}: no directory {p.parent}")
+    else:
+        _make_parent(p)
+    if not os.access(p.parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise PermissionError(f"cannot write {what} {p}: permission denied")
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .simulate import simulate
 
     cfg = _config_from_args(args)
+    # check the outputs before computing: a bad path should not cost a whole run
+    if args.output:
+        _check_writable(args.output, "-o")
+    if args.save:
+        _check_writable(args.save, "--save")
     res = simulate(cfg.system, y0=cfg.y0, sample_dt=cfg.sample_dt, **cfg.integration)
     if args.output:
         from .io import write_trajectory
@@ -158,12 +182,40 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(path) -> str:
-    """A text summary of a result file: configuration, progress, periods, statuses."""
-    from .io import sweep_summary
+def _report(path, verify: bool = False) -> str:
+    """A text summary of a result file: configuration, progress, periods, statuses.
+
+    A trajectory file (``simulate -o``) gets its own summary. With ``verify``,
+    every chunk of a sweep file is read (checksums) and the swept values are
+    checked against their SHA-256; a damaged file raises
+    :class:`~stickslip_fast.io.ResultFileError` after the summary is printed.
+    """
+    from .io import file_kind, open_h5, sweep_summary, verify_sweep, writer_alive
+
+    if file_kind(path) == "trajectory":
+        with open_h5(path) as h5:
+            return _trajectory_report(path, h5)
+    text, has_fletcher = _sweep_report(path, sweep_summary(path))
+    if not verify:
+        return text
+    if writer_alive(path):
+        return text + "\nintegrity: not checked (a sweep is writing this file now)"
+    problems, bad = verify_sweep(path)
+    if problems:
+        print(text)
+        from .io import ResultFileError
+
+        raise ResultFileError(
+            f"{path} is corrupted: {'; '.join(problems)} ({int(bad.sum())} of {bad.size} "
+            "values affected). Run the same sweep again to recompute them."
+        )
+    checksums = "Fletcher-32 and SHA-256 verified" if has_fletcher else "SHA-256 verified"
+    return text + f"\nintegrity: ok (every chunk read; {checksums})"
+
+
+def _sweep_report(path, info: dict) -> tuple[str, bool]:
     from .poincare import STATUS_NAMES
 
-    info = sweep_summary(path)
     cfg, attrs = info["config"], info["attrs"]
     done, status, period = info["done"], info["status"], info["period"]
     lines = [f"file:      {path}"]
@@ -188,27 +240,65 @@ def _report(path) -> str:
     if done.any():
         codes, counts = np.unique(status[done], return_counts=True)
         lines.append(
-            "status:    " + ", ".join(f"{STATUS_NAMES[c]} {n}" for c, n in zip(codes, counts))
+            "status:    "
+            + ", ".join(
+                f"{STATUS_NAMES[c] if 0 <= c < len(STATUS_NAMES) else f'code {c}'} {n}"
+                for c, n in zip(codes, counts)
+            )
         )
         ok = done & (status == 0)
         if ok.any():
             per, pc = np.unique(period[ok], return_counts=True)
             hist = ", ".join(f"{'none' if p == 0 else f'P{p}'}: {n}" for p, n in zip(per, pc))
             lines.append(f"periods:   {hist}")
+    return "\n".join(lines), bool(info.get("fletcher32"))
+
+
+def _trajectory_report(path, h5) -> str:
+    """The summary of a single-run file written by ``simulate -o``."""
+    a = h5.attrs
+    cfg = json.loads(a["config"])
+    st = cfg.get("settings", {})
+    lines = [f"file:      {path} (single run, simulate -o)"]
+    if a.get("title"):
+        lines.append(f"title:     {a['title']}")
+    lines.append(
+        f"package:   stickslip_fast {a.get('package_version', '?')}, "
+        f"schema {a.get('schema_version')}, created {a.get('created', '?')}"
+    )
+    sysd = {k: v for k, v in cfg.get("system", {}).items() if v is not None}
+    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    if st:
+        lines.append(
+            f"settings:  method={a.get('method', st.get('method'))} rtol={st['rtol']:g} "
+            f"atol={st['atol']:g} t_end={st['t_end']:g} t_transient={st['t_transient']:g}"
+        )
+    period = int(a["period"])
+    lines.append(
+        f"result:    status {a['status']}, period {period if period else 'none detected'}, "
+        f"{int(a['n_steps'])} steps ({int(a['n_rejected'])} rejected), "
+        f"{int(a['n_crossings'])} Poincare crossings"
+    )
+    n_t = h5["t"].shape[0]
+    sample = cfg.get("sample_dt")
+    lines.append(
+        f"data:      {h5['poincare'].shape[0]} Poincare points, {n_t} samples"
+        + (f" every {sample:g}" if n_t and sample else "")
+        + f"; state {', '.join(s.decode() if isinstance(s, bytes) else str(s) for s in h5['state'][...])}"
+    )
     return "\n".join(lines)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    try:
-        print(_report(args.file))
-    except (OSError, KeyError) as exc:
-        raise ValueError(
-            f"{args.file}: not a readable stickslip_fast result file ({exc})"
-        ) from None
+    print(_report(args.file, verify=True))
     if args.json:
-        from .io import sweep_summary
+        from .io import file_kind, open_h5, sweep_summary
 
-        print(json.dumps(sweep_summary(args.file)["config"], indent=1))
+        if file_kind(args.file) == "trajectory":
+            with open_h5(args.file) as h5:
+                print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+        else:
+            print(json.dumps(sweep_summary(args.file)["config"], indent=1))
     return 0
 
 
@@ -251,6 +341,18 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(f"stickslip-fast: warning: {message}", file=file or sys.stderr)
 
 
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
+
+
+def _os_message(exc: OSError) -> str:
+    """An OSError as one line that names the path."""
+    if exc.filename is not None and exc.strerror:
+        extra = f" -> {exc.filename2}" if exc.filename2 else ""
+        return f"{exc.filename}{extra}: {exc.strerror}"
+    return _one_line(exc) or type(exc).__name__
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -260,12 +362,26 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except (ConfigError, ValueError, ImportError) as exc:  # ImportError: a missing extra
-        print(f"stickslip-fast: error: {exc}", file=sys.stderr)
+        print(f"stickslip-fast: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a path that cannot be read or written, a full disk
+        print(f"stickslip-fast: error: {_os_message(exc)}", file=sys.stderr)
+        return 2
+    except MemoryError as exc:
+        print(
+            f"stickslip-fast: error: out of memory: {_one_line(exc) or 'allocation failed'}; "
+            "ask for fewer values, points or samples",
+            file=sys.stderr,
+        )
         return 2
     except KeyboardInterrupt:
+        # the compiled work stops within about a second (interrupt.call_interruptible)
+        resumable = args.command in ("sweep", "census")
         print(
             "stickslip-fast: interrupted; finished chunks are in the file, "
-            "run the same command again to resume",
+            "run the same command again to resume"
+            if resumable
+            else "stickslip-fast: interrupted",
             file=sys.stderr,
         )
         return 130

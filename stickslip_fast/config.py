@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from .settings import Settings
-from .system import System
+from .system import SWEEPABLE, System
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -124,6 +124,10 @@ def _values_from_spec(spec: Any, key: str) -> np.ndarray:
         num = spec["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise ConfigError(f"{key}.num must be an integer >= 1, got {num!r}")
+        for end in ("start", "stop"):
+            v = spec[end]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ConfigError(f"{key}.{end} must be a number, got {v!r}")
         return np.linspace(float(spec["start"]), float(spec["stop"]), num)
     if isinstance(spec, list) and spec:
         for i, v in enumerate(spec):  # no "3.0" -> 3.0 or true -> 1.0 conversions
@@ -152,16 +156,21 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         allowed = _SECTIONS[section]
         if allowed is not None:
             if not isinstance(value, dict):
-                raise ConfigError(f"[{section}] must be a table")
+                raise ConfigError(
+                    f"{section!r} must be a table ([{section}] with its keys), got {value!r}"
+                )
             unknown = sorted(set(value) - allowed)
             if unknown:
                 raise ConfigError(
                     f"unknown key(s) {unknown} in [{section}]; allowed: {sorted(allowed)}"
                 )
 
-    sys_table = dict(data.get("system", {}))
     if not isinstance(data.get("system", {}), dict):
-        raise ConfigError("[system] must be a table")
+        raise ConfigError(
+            f"'system' must be a table ([system] with preset = ... and fields), "
+            f"got {data['system']!r}"
+        )
+    sys_table = dict(data.get("system", {}))
     preset = sys_table.pop("preset", None)
     try:
         system = System.preset(preset, **sys_table) if preset else System.from_dict(sys_table)
@@ -187,7 +196,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
     except ConfigError:
         raise
     except (ValueError, TypeError) as exc:
-        raise ConfigError(f"[initial]: {exc}") from None
+        key = "y0" if "y0" in initial else "y0_paper"
+        raise ConfigError(f"[initial].{key}: {exc}") from None
 
     integration = dict(data.get("integration", {}))
     for key, value in integration.items():
@@ -225,10 +235,16 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
             values = _values_from_spec(sw["values"], "[sweep].values")
         else:
             raise ConfigError(f"[sweep].param must be a string, got {param!r}")
+        for name in (param,) if isinstance(param, str) else param:
+            if name not in SWEEPABLE:
+                raise ConfigError(
+                    f"[sweep].param {name!r} cannot be swept; choose from {list(SWEEPABLE)}"
+                )
         sweep = {"param": param, "values": values}
         if "mode" in sw:
-            if not isinstance(sw["mode"], str):
-                raise ConfigError(f"[sweep].mode must be a string, got {sw['mode']!r}")
+            modes = ("restart", "continuation", "continuation-both")
+            if sw["mode"] not in modes:
+                raise ConfigError(f"[sweep].mode must be one of {modes}, got {sw['mode']!r}")
             sweep["mode"] = sw["mode"]
         if "chunk_size" in sw:
             cs = sw["chunk_size"]
@@ -263,6 +279,16 @@ def load_config(path: str | Path) -> RunConfig:
             data = tomllib.load(fh)
     except FileNotFoundError:
         raise ConfigError(f"config file not found: {path}") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path} is a directory, not a TOML config file") from None
+    except PermissionError:
+        raise ConfigError(f"{path}: permission denied reading the config file") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read the config file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"{path}: not a TOML text file (invalid UTF-8 at byte {exc.start}; is it binary?)"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: invalid TOML: {exc}") from None
     try:

@@ -59,9 +59,13 @@ Root attributes: ``schema_version``, ``package_version``, ``kind``, ``config``
 from __future__ import annotations
 
 import datetime as _dt
+import errno
+import functools
 import hashlib
 import json
+import math
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -74,11 +78,16 @@ from .poincare import STATUS_NAMES
 __all__ = [
     "SCHEMA_VERSION",
     "ConfigMismatchError",
-    "SweepFile",
+    "ResultFileError",
+    "DiskFullError",
+    "open_h5",
     "SweepLayout",
     "MemoryStore",
     "read_dataset",
     "sweep_summary",
+    "verify_sweep",
+    "file_kind",
+    "SweepFile",
     "config_digest",
     "read_sweep",
     "PER_VALUE_FIELDS",
@@ -133,6 +142,138 @@ _DESCRIPTIONS = {
 
 class ConfigMismatchError(ValueError):
     """An existing result file was made by a different configuration."""
+
+
+class ResultFileError(ValueError):
+    """A result file is not usable: not HDF5, truncated, or corrupted.
+
+    The message names the file and what is wrong with it.
+    """
+
+
+class DiskFullError(OSError):
+    """The file system refused to let a result file grow (disk full or file size limit).
+
+    Raised *before* anything is written, so the file stays complete and
+    resumable once there is space again.
+    """
+
+
+#: Attempts HDF5 makes to read a piece of metadata whose checksum fails while a
+#: file is opened for SWMR reading. HDF5's default is 100 with a doubling sleep
+#: between attempts (1 ns, 2 ns, ...), i.e. 2**100 ns: a corrupted or truncated
+#: file then makes every reader sleep for ever. 2**25 ns = 34 ms of retries is
+#: ample for a writer's flush in progress and bounds a corrupted read to ~70 ms.
+SWMR_READ_ATTEMPTS = 25
+
+
+@functools.lru_cache(maxsize=1)
+def _hdf5_set_read_attempts():
+    """``H5Pset_metadata_read_attempts`` of the HDF5 library h5py uses, or None."""
+    import ctypes
+
+    candidates = []
+    try:
+        with open("/proc/self/maps") as fh:  # the library actually mapped into this process
+            for line in fh:
+                lib = line.split()[-1]
+                if "libhdf5" in os.path.basename(lib) and "_hl" not in os.path.basename(lib):
+                    candidates.append(lib)
+    except OSError:  # pragma: no cover - not Linux
+        pass
+    root = Path(h5py.__file__).parent
+    for pattern in ("../h5py.libs/libhdf5*", ".dylibs/libhdf5*", "../h5py.libs/hdf5*.dll"):
+        candidates += [str(p) for p in root.glob(pattern) if "_hl" not in p.name]
+    probe = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    for lib in dict.fromkeys(candidates):
+        try:
+            fn = ctypes.CDLL(lib).H5Pset_metadata_read_attempts
+        except (OSError, AttributeError):  # pragma: no cover
+            continue
+        fn.argtypes = [ctypes.c_int64, ctypes.c_uint]
+        fn.restype = ctypes.c_int
+        if fn(probe.id, 1) >= 0:  # the same library instance accepts h5py's identifiers
+            return fn
+    return None  # pragma: no cover - readers then rely on the truncation pre-check only
+
+
+def _superblock_eof(path: Path) -> int | None:
+    """End-of-file address stored in a version 2/3 superblock, or None."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(48)
+    except OSError:
+        return None
+    if len(head) < 48 or head[:8] != b"\x89HDF\r\n\x1a\n" or head[8] not in (2, 3):
+        return None
+    size = head[9]
+    if size != 8:
+        return None
+    return int.from_bytes(head[12 + 2 * size : 12 + 3 * size], "little")
+
+
+def _truncation(path: Path) -> str | None:
+    """A message when the file is shorter than its superblock says, else None."""
+    stored = _superblock_eof(path)
+    actual = path.stat().st_size
+    if stored is not None and actual < stored:
+        return (
+            f"truncated: {actual} bytes on disk but the file records {stored} "
+            "(cut short by a kill, a full disk or an incomplete copy)"
+        )
+    return None
+
+
+def open_h5(path: str | Path, *, check_truncation: bool = True) -> h5py.File:
+    """Open a result file for reading, safely and with bounded time.
+
+    The file is opened in SWMR mode (so it can be read while a sweep appends to
+    it, or after a writer was killed), with a bounded number of metadata read
+    attempts (see :data:`SWMR_READ_ATTEMPTS`) so that a corrupted file fails
+    within milliseconds instead of hanging.
+
+    Parameters
+    ----------
+    path : str or Path
+    check_truncation : bool
+        Refuse a file shorter than its superblock records (default).
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ResultFileError
+        If it is not an HDF5 file, is truncated, or its metadata is corrupted.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"no such file: {path}")
+    if path.is_dir():
+        raise ResultFileError(f"{path} is a directory, not a result file")
+    live = writer_alive(path)
+    if check_truncation and not live:  # a live writer may have allocated past the end
+        problem = _truncation(path)
+        if problem:
+            raise ResultFileError(f"{path}: {problem}")
+    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    fapl.set_libver_bounds(h5py.h5f.LIBVER_LATEST, h5py.h5f.LIBVER_LATEST)
+    setter = _hdf5_set_read_attempts()
+    if setter is not None:
+        setter(fapl.id, SWMR_READ_ATTEMPTS)
+    try:
+        fid = h5py.h5f.open(
+            os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ, fapl=fapl
+        )
+    except (OSError, RuntimeError) as exc:
+        hint = "; a sweep is writing it now, try again" if live else ""
+        raise ResultFileError(f"{path}: not a readable HDF5 file ({_short(exc)}){hint}") from None
+    return h5py.File(fid)
+
+
+def _short(exc: BaseException) -> str:
+    """The first line of an HDF5 error message, without h5py's prefix noise."""
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    return text
 
 
 def _canonical(obj: Any) -> Any:
@@ -263,12 +404,24 @@ class SweepFile:
     (raising :class:`ConfigMismatchError` otherwise). Chunks are written with
     :meth:`write` and flushed at once; the file stays readable (SWMR) while a
     sweep appends to it, and a killed sweep loses only the chunks in flight.
+
+    Reopening verifies the file: every chunk is read (Fletcher-32 and
+    decompression checks), the swept values are checked against the SHA-256
+    stored in the configuration, and the length against the superblock. A file
+    left by a killed writer, or with unreadable chunks or a truncated tail, is
+    rebuilt from what can be read; the values that could not be read are marked
+    not done and recomputed (a warning says how many). Before each write the
+    file's growth is reserved on disk, so a full disk raises
+    :class:`DiskFullError` with the file complete and resumable.
     """
 
     def __init__(self, h5: h5py.File, layout: SweepLayout, lock: _WriterLock | None = None):
         self.h5 = h5
         self.layout = layout
         self._lock = lock
+        self.path = Path(h5.filename)
+        self._room_fd: int | None = None  # kept open: reserving costs ~0.2 ms, not ~1 ms
+        self._chunk_info: dict | None = None
 
     # --------------------------------------------------------------- creation
     @classmethod
@@ -282,26 +435,24 @@ class SweepFile:
         notes: str = "",
         package_version: str = "",
     ) -> SweepFile:
-        path = Path(path)
+        # the resolved path: a symlink to a live file meets the same lock, and a
+        # rebuild replaces the file itself, never the link
+        path = Path(os.path.realpath(path))
         text, digest = config_digest(config)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        _make_parent(path)
         lock = _WriterLock(path)
+        meta = (text, digest, config, title, notes, package_version)
         try:
-            if path.exists():
-                h5 = cls._reopen(path, text, digest)
+            if path.exists() or path.is_symlink():
+                h5 = cls._reopen(path, layout, meta)
             else:
                 tmp = path.with_name(path.name + ".partial")
-                h5 = h5py.File(tmp, "w", libver="latest")
                 try:
-                    cls._create_layout(
-                        h5, layout, text, digest, config, title, notes, package_version
-                    )
-                    h5.close()
-                    tmp.replace(path)  # the file appears only once its layout is complete
+                    _new_file(tmp, layout, meta).close()
                 except BaseException:
-                    h5.close()
                     tmp.unlink(missing_ok=True)
                     raise
+                tmp.replace(path)  # the file appears only once its layout is complete
                 h5 = h5py.File(path, "r+", libver="latest")
             h5.swmr_mode = True
         except BaseException:
@@ -310,41 +461,71 @@ class SweepFile:
         return cls(h5, layout, lock)
 
     @classmethod
-    def _reopen(cls, path: Path, text: str, digest: str) -> h5py.File:
-        """Open an existing file for appending after checking its configuration."""
+    def _reopen(cls, path: Path, layout: SweepLayout, meta: tuple) -> h5py.File:
+        """Open an existing file for appending after checking its configuration and data."""
+        text, digest = meta[0], meta[1]
+        if path.is_dir():
+            raise ResultFileError(f"{path} is a directory; choose a file name for the output")
         try:
-            h5 = h5py.File(path, "r", libver="latest", swmr=True)
-        except OSError as exc:
+            src = open_h5(path, check_truncation=False)
+        except ResultFileError as exc:
             raise ConfigMismatchError(
-                f"{path} exists but is not a readable HDF5 file ({exc}); "
+                f"{path} exists but is not a readable HDF5 file ({str(exc).split(': ', 1)[-1]}); "
                 "remove it or choose another output path"
             ) from None
-        with h5:
-            found = h5.attrs.get("config_sha256")
-            old = h5.attrs.get("config")
-            schema = h5.attrs.get("schema_version")
-        if found != digest:
-            detail = ""
-            if old is not None:
-                try:
-                    changed = _diff_keys(json.loads(old), json.loads(text))
-                    detail = f" (differs in: {', '.join(changed) or 'unknown'})"
-                except json.JSONDecodeError:
-                    pass
-            raise ConfigMismatchError(
-                f"{path} was written by a different configuration{detail}; refusing to "
-                "overwrite it. Use another output path, or delete the file to start over."
+        with src:
+            try:
+                found = src.attrs.get("config_sha256")
+                old = src.attrs.get("config")
+                schema = src.attrs.get("schema_version")
+            except (OSError, RuntimeError, KeyError) as exc:
+                raise ResultFileError(
+                    f"{path}: its configuration cannot be read ({_short(exc)}); the file is "
+                    "corrupted. Remove it (or choose another output path) to start over."
+                ) from None
+            if found is None or old is None:
+                why = _truncation(path) or "no 'config' attribute"
+                raise ResultFileError(
+                    f"{path}: its configuration cannot be read ({why}); it is not a complete "
+                    "stickslip_fast result file. Remove it (or choose another output path) "
+                    "to start over."
+                )
+            if found != digest:
+                detail = ""
+                if old is not None:
+                    try:
+                        changed = _diff_keys(json.loads(old), json.loads(text))
+                        detail = f" (differs in: {', '.join(changed) or 'unknown'})"
+                    except json.JSONDecodeError:
+                        pass
+                raise ConfigMismatchError(
+                    f"{path} was written by a different configuration{detail}; refusing to "
+                    "overwrite it. Use another output path, or delete the file to start over."
+                )
+            if schema != SCHEMA_VERSION:
+                raise ConfigMismatchError(f"{path} has an unsupported schema version {schema!r}")
+            problems, bad = scan_sweep(src, layout, meta[2])
+        truncated = _truncation(path)
+        if truncated:
+            problems.insert(0, truncated)
+        if not problems:
+            try:
+                return h5py.File(path, "r+", libver="latest")
+            except OSError as exc:
+                if "already open for write" not in str(exc):
+                    problems.append(f"cannot be opened for writing ({_short(exc)})")
+        # A writer was killed (we hold the writer lock, so none is alive; HDF5 left the
+        # file marked open), or parts of the file are unreadable: rebuild it from what
+        # can be read, then append. Values that could not be read are computed again.
+        _rebuild(path, layout, meta, bad)
+        if problems:
+            n_bad = int(np.count_nonzero(bad))
+            warnings.warn(
+                f"{path}: {'; '.join(problems)}. Recovered what could be read; "
+                f"{n_bad} of {bad.size} value(s) could not be read and will be computed again.",
+                UserWarning,
+                stacklevel=4,
             )
-        if schema != SCHEMA_VERSION:
-            raise ConfigMismatchError(f"{path} has an unsupported schema version {schema!r}")
-        try:
-            return h5py.File(path, "r+", libver="latest")
-        except OSError as exc:
-            if "already open for write" not in str(exc):
-                raise
-        # A writer was killed (we hold the writer lock, so none is alive): HDF5 left
-        # the file marked open. Rebuild it from what was flushed, then append.
-        _rebuild(path)
         return h5py.File(path, "r+", libver="latest")
 
     @staticmethod
@@ -400,6 +581,7 @@ class SweepFile:
                 name, shape=shape, dtype=dtype, fillvalue=fill, chunks=chunks,
                 compression="gzip" if chunks else None,
                 compression_opts=1 if chunks else None, shuffle=bool(chunks),
+                fletcher32=bool(chunks),
             )  # fmt: skip
             for i, dim in enumerate(dims):
                 d.dims[i].attach_scale(scales[dim])
@@ -420,15 +602,52 @@ class SweepFile:
         """Write one block of values at grid ``index`` (ints and slices) and flush.
 
         ``data`` holds points, t_points, final_state and the PER_VALUE_FIELDS,
-        each with the block's value axes first. ``done`` is set last.
+        each with the block's value axes first. ``done`` is set last. Room for
+        the block is reserved on disk first: if the file cannot grow by that
+        much, :class:`DiskFullError` is raised and nothing is written.
         """
-        for name in self.layout.result_fields:
+        names = self.layout.result_fields
+        self._reserve(index, names + ("done",))
+        for name in names:
             self.h5[name][index] = data[name]
         self.h5.flush()
         self.h5["done"][index] = 1
         self.h5.flush()
 
+    def _reserve(self, index: tuple, names: tuple[str, ...]) -> None:
+        """Check that the file can grow by what writing ``names`` at ``index`` may need.
+
+        HDF5 rewrites every compressed chunk a write touches, at a new address
+        when it grows, and updates its chunk index. The bound is the
+        uncompressed size of every touched chunk plus 4 KiB each, plus 64 KiB
+        for metadata. A write that would fail for lack of space fails here
+        (:func:`ensure_room`), before HDF5 has touched the file.
+        """
+        need = 64 * 1024
+        if self._chunk_info is None:  # h5py property access is slow: read it once
+            self._chunk_info = {}
+            for n_ in _data_fields(self.layout):
+                ds = self.h5[n_]
+                self._chunk_info[n_] = (ds.shape, ds.chunks, ds.dtype.itemsize)
+        for name in names:
+            shape, chunks, itemsize = self._chunk_info[name]
+            if chunks is None:
+                continue
+            n = 1
+            for d, (size, c) in enumerate(zip(shape, chunks)):
+                sel = index[d] if d < len(index) else slice(None)
+                if isinstance(sel, slice):
+                    lo, hi, _ = sel.indices(size)
+                    n *= max(1, (max(hi, lo + 1) - 1) // c - lo // c + 1)
+            need += n * (math.prod(chunks) * itemsize + 4096)
+        if self._room_fd is None:
+            self._room_fd = os.open(self.path, os.O_WRONLY)
+        ensure_room(self.path, need, fd=self._room_fd)
+
     def close(self) -> None:
+        if self._room_fd is not None:
+            os.close(self._room_fd)
+            self._room_fd = None
         if self.h5.id.valid:
             self.h5.close()
         if self._lock is not None:
@@ -442,11 +661,270 @@ class SweepFile:
         self.close()
 
 
+_NO_ROOM = (errno.ENOSPC, errno.EFBIG, getattr(errno, "EDQUOT", errno.ENOSPC))
+
+
+def ensure_room(path: Path, need: int, fd: int | None = None) -> None:
+    """Raise :class:`DiskFullError` unless ``path`` can grow by ``need`` bytes now.
+
+    The file size limit (``RLIMIT_FSIZE``) and the free space of the file
+    system (``statvfs``) are checked first. When the disk is nearly full (less
+    than 64 times ``need`` free), the room is also taken for real with
+    ``posix_fallocate`` past the end of the file and given back, which catches
+    quotas and file systems whose free-space figure is approximate.
+    ``fd``: an open descriptor of ``path`` to use (default: open one).
+    """
+    own = fd is None
+    if own:
+        fd = os.open(path, os.O_WRONLY)
+    try:
+        size = os.fstat(fd).st_size
+        try:
+            import resource
+
+            limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+            if limit == resource.RLIM_INFINITY:
+                limit = -1
+        except (ImportError, OSError, ValueError):  # pragma: no cover - not POSIX
+            limit = -1
+        if limit >= 0 and size + need > limit:
+            raise disk_full(path, need, OSError(errno.EFBIG, os.strerror(errno.EFBIG)))
+        try:
+            st = os.fstatvfs(fd)
+            free = st.f_bavail * st.f_frsize
+        except OSError:  # pragma: no cover
+            free = 0
+        if free < need:
+            raise disk_full(path, need, OSError(errno.ENOSPC, os.strerror(errno.ENOSPC)))
+        if free >= 64 * need:
+            return
+        try:
+            try:
+                os.posix_fallocate(fd, size, need)
+            except OSError as exc:
+                if exc.errno in _NO_ROOM:
+                    raise
+                # no fallocate on this file system: write the zeros
+                block = bytes(min(need, 1 << 20))
+                for at in range(size, size + need, len(block)):
+                    os.pwrite(fd, block[: size + need - at], at)
+        except OSError as exc:
+            if exc.errno not in _NO_ROOM:
+                raise
+            raise disk_full(path, need, exc) from None
+        finally:
+            os.ftruncate(fd, size)
+    finally:
+        if own:
+            os.close(fd)
+
+
+def disk_full(path: Path, need: int | None, exc: BaseException) -> DiskFullError:
+    """The one-line error for a file that cannot grow."""
+    reason = getattr(exc, "strerror", None) or _short(exc)
+    room = f" by {need / 1024:.0f} KiB" if need else ""
+    err = DiskFullError(
+        f"cannot write {path}: no room to grow it{room} ({reason}). Everything written so "
+        "far is safe: free some space (or raise the file size limit) and run the same "
+        "command again to resume"
+    )
+    err.errno = getattr(exc, "errno", None) or errno.ENOSPC
+    return err
+
+
+def _is_no_room(exc: BaseException) -> bool:
+    """An HDF5/OS error that means the disk or the file size limit is full."""
+    if isinstance(exc, OSError) and exc.errno in _NO_ROOM:
+        return True
+    text = str(exc)
+    return any(
+        key in text
+        for key in ("No space left", "File too large", "errno = 28", "errno = 27", "Disk quota")
+    )
+
+
+def _make_parent(path: Path) -> None:
+    """Create the output's folder, with a one-line error naming it when that fails."""
+    parent = path.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise NotADirectoryError(
+            f"cannot write {path}: {_first_file(parent)} is a file, not a directory"
+        ) from None
+    except NotADirectoryError:
+        raise NotADirectoryError(
+            f"cannot write {path}: {_first_file(parent)} is a file, not a directory"
+        ) from None
+    except PermissionError:
+        raise PermissionError(f"cannot create the directory {parent}: permission denied") from None
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise PermissionError(f"cannot write {path}: the directory {parent} is not writable")
+
+
+def _first_file(path: Path) -> Path:
+    """The first component of ``path`` that exists and is not a directory."""
+    for p in reversed([path, *path.parents]):
+        if p.exists() and not p.is_dir():
+            return p
+    return path
+
+
+def _data_fields(layout: SweepLayout) -> tuple[str, ...]:
+    return (*layout.result_fields, "done")
+
+
+def scan_sweep(
+    h5: h5py.File, layout: SweepLayout | None = None, config: dict | None = None
+) -> tuple[list[str], np.ndarray]:
+    """Verify a sweep file by reading every chunk of every per-value dataset.
+
+    Reading checks each chunk's Fletcher-32 checksum and its compression; the
+    swept values are checked against their SHA-256 in the stored configuration.
+
+    Parameters
+    ----------
+    h5 : h5py.File
+        An open sweep file.
+    layout : SweepLayout, optional
+        The expected layout (default: taken from the file).
+    config : dict, optional
+        The expected configuration (default: the file's own, after checking it
+        against the stored ``config_sha256``).
+
+    Returns
+    -------
+    problems : list of str
+        What is wrong, one phrase each (empty for a sound file).
+    bad : ndarray of bool, grid shape
+        Values with at least one unreadable piece.
+    """
+    problems: list[str] = []
+    if config is None:
+        cfg = stored_config(h5)
+    else:
+        cfg = json.loads(config_digest(config)[0])
+        try:
+            stored_config(h5)
+        except ResultFileError as exc:
+            problems.append(str(exc).split(": ", 1)[-1])
+    params = list(cfg["param"])
+    if layout is None:
+        fields = ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS)
+        fields += tuple(f for a in cfg.get("analyses", ()) for f in ANALYSES[a])
+        if "t_converged" in h5:
+            fields += ("t_converged",)
+        grid = (2,) if cfg["mode"] == "continuation-both" else ()
+        grid += tuple(int(n) for n in cfg["n_values"])
+    else:
+        fields = _data_fields(layout)
+        grid = layout.grid_shape
+    for name, want in zip(params, cfg.get("values_sha256", ())):
+        try:
+            got = hashlib.sha256(np.ascontiguousarray(h5[name][...], dtype="<f8").tobytes())
+            if got.hexdigest() != want:
+                problems.append(
+                    f"the stored values of {name!r} do not match their SHA-256 in the "
+                    "configuration (corrupted coordinate)"
+                )
+        except (OSError, RuntimeError, KeyError, ValueError) as exc:
+            problems.append(f"the values of {name!r} cannot be read ({_short(exc)})")
+    bad = np.zeros(grid, dtype=bool)
+    g = len(grid)
+    unreadable: list[str] = []
+    first = ""
+    for name in fields:
+        try:
+            ds = h5[name]
+            if ds.shape[:g] != grid:
+                raise ValueError(f"shape {ds.shape} does not match the grid {grid}")
+            chunks = list(ds.iter_chunks()) if ds.chunks else [(slice(None),) * ds.ndim]
+        except (OSError, RuntimeError, KeyError, ValueError) as exc:
+            problems.append(f"dataset {name!r} cannot be read ({_short(exc)})")
+            bad[...] = True
+            continue
+        n_bad = 0
+        for sel in chunks:
+            try:
+                ds[sel]
+            except (OSError, RuntimeError, ValueError) as exc:
+                bad[sel[:g]] = True
+                n_bad += 1
+                first = first or _short(exc)
+        if n_bad:
+            unreadable.append(f"{name} ({n_bad} of {len(chunks)})")
+    if unreadable:
+        problems.append(
+            f"unreadable chunks (checksum or decompression failed: {first}) in "
+            + ", ".join(unreadable)
+        )
+    return problems, bad
+
+
+def stored_config(h5: h5py.File) -> dict:
+    """The configuration stored in a result file, checked against its SHA-256.
+
+    Raises
+    ------
+    ResultFileError
+        If the attribute is missing, is not JSON, or does not match
+        ``config_sha256``.
+    """
+    name = h5.filename
+    try:
+        text = h5.attrs["config"]
+        want = h5.attrs.get("config_sha256")
+    except (OSError, RuntimeError, KeyError) as exc:
+        raise ResultFileError(f"{name}: the configuration cannot be read ({_short(exc)})") from None
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "replace")
+    if want is not None and hashlib.sha256(str(text).encode()).hexdigest() != want:
+        raise ResultFileError(
+            f"{name}: the stored configuration does not match its SHA-256 (corrupted attribute)"
+        )
+    try:
+        return json.loads(text)
+    except (TypeError, ValueError):
+        raise ResultFileError(f"{name}: the stored configuration is not valid JSON") from None
+
+
+def _new_file(path: Path, layout: SweepLayout, meta: tuple) -> h5py.File:
+    """A fresh sweep file with the complete layout and no values (open for writing)."""
+    text, digest, config, title, notes, package_version = meta
+    try:
+        h5 = h5py.File(path, "w", libver="latest")
+    except OSError as exc:
+        raise _os_error(path, exc) from None
+    try:
+        SweepFile._create_layout(h5, layout, text, digest, config, title, notes, package_version)
+        h5.flush()
+    except BaseException as exc:
+        h5.close()
+        if isinstance(exc, (OSError, RuntimeError)) and _is_no_room(exc):
+            raise disk_full(path, None, exc) from None
+        raise
+    return h5
+
+
+def _os_error(path: Path, exc: OSError) -> OSError:
+    """h5py's OSError for a file that cannot be created, as one line naming the path."""
+    if _is_no_room(exc):
+        return disk_full(path, None, exc)
+    text = str(exc)
+    if "Permission denied" in text or "errno = 13" in text:
+        return PermissionError(f"cannot write {path}: permission denied")
+    if "Is a directory" in text or "errno = 21" in text:
+        return IsADirectoryError(f"cannot write {path}: it is a directory")
+    return OSError(f"cannot write {path}: {_short(exc)}")
+
+
 class _WriterLock:
     """An exclusive OS lock on ``<file>.lock`` held while a sweep writes the file.
 
     The OS drops it when the process dies, which tells a crashed writer (resume
-    is safe) from a live one (refuse). No-op where fcntl is unavailable.
+    is safe) from a live one (refuse). ``path`` must be resolved (symlinks
+    followed), so that every name of a file meets the same lock. No-op where
+    fcntl is unavailable.
     """
 
     def __init__(self, path: Path):
@@ -456,74 +934,129 @@ class _WriterLock:
             import fcntl
         except ImportError:  # pragma: no cover - not POSIX
             return
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        for _ in range(10):
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError as exc:
+                raise _lock_error(self.path, exc) from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                os.close(fd)
+                raise ConfigMismatchError(
+                    f"another process is writing {path} (lock {self.path} is held); "
+                    "wait for it to finish or choose another output path"
+                ) from None
+            # the previous holder may have removed the lock file between our open and
+            # flock: then we hold a lock on a deleted file; take the new one instead
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                self.fd = fd
+                return
             os.close(fd)
-            raise ConfigMismatchError(
-                f"another process is writing {path} (lock {self.path} is held); "
-                "wait for it to finish or choose another output path"
-            ) from None
-        self.fd = fd
+        raise ConfigMismatchError(f"cannot take the lock {self.path} (it keeps changing)")
 
     def release(self) -> None:
         if self.fd is not None:
+            # remove the file while still holding the lock, then let it go
+            self.path.unlink(missing_ok=True)
             os.close(self.fd)
             self.fd = None
-            self.path.unlink(missing_ok=True)
 
 
-def _copy_attrs(src, dst) -> None:
-    for key, value in src.attrs.items():
-        if key not in ("DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME"):
-            dst.attrs[key] = value
+def _lock_error(path: Path, exc: OSError) -> OSError:
+    if isinstance(exc, PermissionError):
+        return PermissionError(f"cannot create the lock {path}: permission denied")
+    return OSError(f"cannot create the lock {path}: {exc.strerror or exc}")
 
 
-def _rebuild(path: Path, slab: int = 4096) -> None:
-    """Copy a crashed writer's file into a fresh one (same layout, flushed data only)."""
+def writer_alive(path: str | Path) -> bool:
+    """Whether a live process holds the writer lock of the result file ``path``."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return False
+    real = Path(os.path.realpath(path))
+    lock = real.with_name(real.name + ".lock")
+    try:
+        fd = os.open(lock, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def _rebuild(path: Path, layout: SweepLayout, meta: tuple, bad: np.ndarray) -> None:
+    """Copy what can be read of a damaged or crashed writer's file into a fresh one.
+
+    The fresh file gets the layout this sweep would create (coordinates from the
+    caller, whose values match the stored SHA-256); every readable chunk of the
+    per-value datasets is copied; values marked ``bad`` are set not done.
+    """
     tmp = path.with_name(path.name + ".recovering")
-    with (
-        h5py.File(path, "r", libver="latest", swmr=True) as src,
-        h5py.File(tmp, "w", libver="latest") as dst,
-    ):
-        _copy_attrs(src, dst)
-        for name, ds in src.items():
-            if "CLASS" in ds.attrs and ds.attrs["CLASS"] == b"DIMENSION_SCALE":
-                new = dst.create_dataset(name, data=ds[...], dtype=ds.dtype)
-                new.make_scale(name)
-                _copy_attrs(ds, new)
-        for name, ds in src.items():
-            if name in dst:
-                continue
-            new = dst.create_dataset(
-                name, shape=ds.shape, dtype=ds.dtype, chunks=ds.chunks, fillvalue=ds.fillvalue,
-                compression=ds.compression, compression_opts=ds.compression_opts,
-                shuffle=ds.shuffle,
-            )  # fmt: skip
-            for i, dim in enumerate(ds.dims):
-                for scale_name in dim.keys():
-                    new.dims[i].attach_scale(dst[scale_name.lstrip("/")])
-            _copy_attrs(ds, new)
-            if ds.ndim == 0:
-                new[()] = ds[()]
-                continue
-            for a in range(0, ds.shape[0], slab):
-                new[a : a + slab] = ds[a : a + slab]
-    tmp.replace(path)
-
-
-def _open_read(path: str | Path) -> h5py.File:
-    """Open a result file for reading (also while a sweep is appending to it)."""
-    return h5py.File(path, "r", libver="latest", swmr=True)
+    try:
+        with (
+            open_h5(path, check_truncation=False) as src,
+            _new_file(tmp, layout, meta) as dst,
+        ):
+            for key in ("created", "package_version"):
+                try:
+                    if key in src.attrs:
+                        dst.attrs[key] = src.attrs[key]
+                except (OSError, RuntimeError):
+                    pass
+            for name in _data_fields(layout):
+                try:
+                    sds = src[name]
+                    chunks = list(sds.iter_chunks()) if sds.chunks else [(slice(None),) * sds.ndim]
+                    if sds.shape != dst[name].shape:
+                        continue
+                except (OSError, RuntimeError, KeyError, ValueError):
+                    continue
+                fill = dst[name].fillvalue
+                for sel in chunks:
+                    try:
+                        block = sds[sel]
+                    except (OSError, RuntimeError, ValueError):
+                        continue
+                    empty = np.all(np.isnan(block)) if np.isnan(fill) else np.all(block == fill)
+                    if not empty:
+                        dst[name][sel] = block
+            if bad.any():
+                done = dst["done"][...]
+                done[bad] = 0
+                dst["done"][...] = done
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def read_dataset(path: str | Path, name: str) -> np.ndarray:
-    """One whole dataset of a result file (KeyError naming the file if it has none)."""
-    with _open_read(path) as h5:
+    """One whole dataset of a result file (KeyError naming the file if it has none).
+
+    Raises
+    ------
+    ResultFileError
+        If the file or the dataset cannot be read (truncated or corrupted).
+    """
+    with open_h5(path) as h5:
         if name not in h5:
             raise KeyError(f"{path} has no {name!r} dataset")
-        return h5[name][...]
+        try:
+            return h5[name][...]
+        except (OSError, RuntimeError) as exc:
+            raise ResultFileError(
+                f"{path}: {name!r} cannot be read ({_short(exc)}); the file is corrupted"
+            ) from None
 
 
 def sweep_summary(path: str | Path) -> dict[str, Any]:
@@ -532,41 +1065,106 @@ def sweep_summary(path: str | Path) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``config`` (parsed), ``attrs`` (the root attributes ``title``,
-        ``package_version``, ``schema_version``, ``created`` where present),
-        ``axes`` (name -> values), ``done`` (bool), ``status`` and ``period``.
+        ``config`` (parsed, checked against its SHA-256), ``attrs`` (the root
+        attributes ``title``, ``package_version``, ``schema_version``,
+        ``created`` where present), ``axes`` (name -> values), ``done`` (bool),
+        ``status`` and ``period``.
+
+    Raises
+    ------
+    ResultFileError
+        If the file is not a sweep file, or what the summary needs cannot be read.
     """
-    with _open_read(path) as h5:
-        config = json.loads(h5.attrs["config"])
-        keys = ("title", "package_version", "schema_version", "created")
-        return {
-            "config": config,
-            "attrs": {k: h5.attrs[k] for k in keys if k in h5.attrs},
-            "axes": {name: h5[name][...] for name in config["param"]},
-            "done": h5["done"][...].astype(bool),
-            "status": h5["status"][...],
-            "period": h5["period"][...],
-        }
+    with open_h5(path) as h5:
+        try:
+            if "config" not in h5.attrs or "done" not in h5:
+                raise ResultFileError(
+                    f"{path}: an HDF5 file, but not a stickslip_fast sweep file "
+                    "(no 'config' attribute or 'done' dataset)"
+                )
+            config = stored_config(h5)
+            keys = ("title", "package_version", "schema_version", "created")
+            return {
+                "config": config,
+                "attrs": {k: h5.attrs[k] for k in keys if k in h5.attrs},
+                "axes": {name: h5[name][...] for name in config["param"]},
+                "done": h5["done"][...].astype(bool),
+                "status": h5["status"][...],
+                "period": h5["period"][...],
+                "fletcher32": bool(h5["done"].fletcher32),
+            }
+        except (OSError, RuntimeError, KeyError) as exc:
+            raise ResultFileError(
+                f"{path}: cannot be summarised, the file is damaged ({_short(exc)})"
+            ) from None
+
+
+def file_kind(path: str | Path) -> str:
+    """``"trajectory"`` for a ``simulate -o`` file, ``"sweep"`` for anything else."""
+    with open_h5(path) as h5:
+        try:
+            kind = h5.attrs.get("kind")
+        except (OSError, RuntimeError, KeyError):
+            return "sweep"  # the sweep reader reports what is wrong
+    return "trajectory" if kind == "trajectory" else "sweep"
+
+
+def verify_sweep(path: str | Path) -> tuple[list[str], np.ndarray]:
+    """Read every chunk of a sweep file and check its SHA-256s (see :func:`scan_sweep`)."""
+    with open_h5(path) as h5:
+        return scan_sweep(h5)
 
 
 def read_sweep(path: str | Path) -> dict[str, Any]:
-    """Read a whole sweep file into memory: arrays, coordinates and configuration."""
+    """Read a whole sweep file into memory: arrays, coordinates and configuration.
+
+    Raises
+    ------
+    ResultFileError
+        If the file is not a sweep file, is truncated or corrupted (the message
+        names the file, and the dataset that cannot be read).
+    """
     out: dict[str, Any] = {}
-    with _open_read(path) as h5:
-        if h5.attrs.get("schema_version") != SCHEMA_VERSION:
-            raise ValueError(f"{path}: not a stickslip_fast sweep file (schema_version missing)")
-        out["config"] = json.loads(h5.attrs["config"])
-        out["attrs"] = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
-        params = tuple(str(h5.attrs["param"]).split(","))
-        out["param"] = params
-        out["axes"] = tuple(h5[p][...] for p in params)
-        out["branches"] = "branch" in h5
-        out["state_names"] = [s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]]
-        for name in ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS):
-            out[name] = h5[name][...]
-        out["analyses"] = {
-            name: h5[name][...] for name in (*ANALYSIS_FIELDS, "t_converged") if name in h5
-        }
+    with open_h5(path) as h5:
+        name = "attributes"
+        try:
+            if h5.attrs.get("schema_version") != SCHEMA_VERSION:
+                raise ResultFileError(
+                    f"{path}: not a stickslip_fast sweep file (schema_version missing)"
+                )
+            if h5.attrs.get("kind") == "trajectory":
+                raise ResultFileError(
+                    f"{path} is a trajectory file (simulate -o); read it with read_trajectory"
+                )
+            out["config"] = stored_config(h5)
+            out["attrs"] = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
+            params = tuple(str(h5.attrs["param"]).split(","))
+            out["param"] = params
+            name = "coordinates"
+            out["axes"] = tuple(h5[p][...] for p in params)
+            out["branches"] = "branch" in h5
+            out["state_names"] = [
+                s.decode() if isinstance(s, bytes) else s for s in h5["state"][...]
+            ]
+            for name in ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS):
+                out[name] = h5[name][...]
+            out["analyses"] = {}
+            for name in (*ANALYSIS_FIELDS, "t_converged"):
+                if name in h5:
+                    out["analyses"][name] = h5[name][...]
+        except (OSError, RuntimeError, KeyError, ValueError) as exc:
+            if isinstance(exc, ResultFileError):
+                raise
+            raise ResultFileError(
+                f"{path}: {name!r} cannot be read ({_short(exc)}); the file is corrupted"
+            ) from None
+    for p, axis, want in zip(params, out["axes"], out["config"].get("values_sha256", ())):
+        got = hashlib.sha256(np.ascontiguousarray(axis, dtype="<f8").tobytes()).hexdigest()
+        if got != want:
+            raise ResultFileError(
+                f"{path}: the stored values of {p!r} do not match their SHA-256 in the "
+                "configuration; the file is corrupted"
+            )
     return out
 
 
@@ -640,7 +1238,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
     tp = np.asarray(result.t_poincare, dtype="f8")
     pts = np.asarray(result.poincare, dtype="f8").reshape(len(tp), n_state)
 
-    path.parent.mkdir(parents=True, exist_ok=True)
+    _make_parent(path)
     tmp = path.with_name(path.name + ".partial")
     try:
         with h5py.File(tmp, "w", libver="latest") as h5:
@@ -686,14 +1284,16 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
                 d = h5.create_dataset(
                     name, data=data, maxshape=(None,) * data.ndim,
                     compression="gzip" if data.size else None,
-                    compression_opts=1 if data.size else None,
+                    compression_opts=1 if data.size else None, fletcher32=True,
                 )  # fmt: skip
                 for i, sc in enumerate(dims):
                     d.dims[i].attach_scale(sc)
                 d.attrs["description"] = desc
         tmp.replace(path)
-    except BaseException:
+    except BaseException as exc:
         tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and not exc.filename:
+            raise _os_error(path, exc) from None
         raise
     return path
 
@@ -723,12 +1323,17 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
     from .simulate import SimulationResult
     from .system import System
 
-    with h5py.File(path, "r") as h5:
+    with open_h5(path) as h5:
         if h5.attrs.get("schema_version") != SCHEMA_VERSION or h5.attrs.get("kind") != "trajectory":
-            raise ValueError(f"{path}: not a stickslip_fast trajectory file")
-        attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
-        data = {name: h5[name][...] for name in ("t", "y", "t_poincare", "poincare", "final_state")}
-        names = [s.decode() if isinstance(s, bytes) else str(s) for s in h5["state"][...]]
+            raise ResultFileError(f"{path}: not a stickslip_fast trajectory file")
+        try:
+            attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
+            data = {
+                name: h5[name][...] for name in ("t", "y", "t_poincare", "poincare", "final_state")
+            }
+            names = [s.decode() if isinstance(s, bytes) else str(s) for s in h5["state"][...]]
+        except (OSError, RuntimeError, KeyError) as exc:
+            raise ResultFileError(f"{path}: corrupted ({_short(exc)})") from None
     config = json.loads(attrs["config"])
     system = System.from_dict(config["system"])
     result = SimulationResult(

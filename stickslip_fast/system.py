@@ -282,7 +282,10 @@ class System:
         """Validate an initial state; ``None`` is the zero state (v_b(0) = 0)."""
         if y0 is None:
             return np.zeros(self.n_state)
-        y = np.asarray(y0, dtype=float)
+        try:
+            y = np.asarray(y0, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"y0 must be an array of {self.n_state} numbers: {exc}") from None
         if y.ndim != 1 or y.size != self.n_state:
             raise ValueError(
                 f"y0 must have length {self.n_state} ({', '.join(self.state_names)}), "
