@@ -109,3 +109,14 @@ def test_bad_input_names_the_argument(branch):
         continue_orbit(o, "eta", (1.0, 3.0), ds=-0.1)
     with pytest.raises(ValueError, match="orbit"):
         continue_orbit(ssf.find_orbit(o.system, o.points[0] + [1e-3, 0, 0, 0], 1, max_iter=0), "eta", (1.0, 3.0))  # fmt: skip
+
+
+def test_branch_reaches_the_issue_value_at_eta_3_30(branch):
+    # From rest the period-1 orbit is not reached at eta = 3.30 (the run ends at rest); the
+    # branch from eta = 2.0 gets there. Issue 10's independent shooting: multiplier -0.171.
+    o, _ = branch
+    br = continue_orbit(o, "eta", (2.0, 3.28), ds=0.05, ds_max=0.1, max_points=60)
+    assert br.status == "bounds" and br.stable.all() and br.bifurcations == []
+    o3 = ssf.find_orbit(o.system.replace(eta=3.30), br.points[-1], 1)
+    assert o3.converged and o3.stable
+    assert abs(o3.multipliers[0] - (-0.171)) < 1e-3
