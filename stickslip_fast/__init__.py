@@ -5,7 +5,9 @@ Models the coupled translational-rotational disks-on-belts system of Kudra et al
 a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
-Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`.
+Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`;
+periodic orbits and their multipliers: :func:`find_orbit`, :func:`find_equilibrium`,
+:func:`continue_orbit` (docs/orbits.md).
 """
 
 from __future__ import annotations
