@@ -30,6 +30,23 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
+def _git_commit() -> str | None:
+    """HEAD of the checkout being benchmarked (with '+dirty' if it has local changes)."""
+    import subprocess
+
+    try:
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=ROOT, capture_output=True, text=True,
+        ).stdout.strip()  # fmt: skip
+    except OSError:
+        return None
+    return (head + ("+dirty" if dirty else "")) or None
+
+
 def machine_info() -> dict:
     import numba
     import scipy
@@ -50,6 +67,7 @@ def machine_info() -> dict:
         stickslip_fast_file=ssf.__file__,
         numba_num_threads=numba.config.NUMBA_NUM_THREADS,
         loadavg_at_start=list(os.getloadavg()),
+        git_commit=_git_commit(),
     )
     try:
         import psutil

@@ -17,7 +17,15 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks import startup, sweeps, work_precision  # noqa: E402
+from benchmarks import (  # noqa: E402
+    converged,
+    peer_diagram,
+    peer_precision,
+    profile_kernel,
+    startup,
+    sweeps,
+    work_precision,
+)
 from benchmarks.common import SWEEP_IMPL, machine_info  # noqa: E402
 from benchmarks.summary import write_summary  # noqa: E402
 
@@ -28,6 +36,10 @@ SECTIONS = (
     "n_scaling",
     "startup",
     "memory",
+    "peers_trajectory",
+    "peers_diagram",
+    "kernel_profile",
+    "converged_stopping",
 )
 
 
@@ -84,6 +96,10 @@ def main(argv=None):
         ("parallel_scaling", lambda: sweeps.parallel_scaling(mode, log)),
         ("n_scaling", lambda: sweeps.n_scaling(mode, log)),
         ("memory", lambda: sweeps.memory(mode, log)),
+        ("peers_trajectory", lambda: peer_precision.run(mode, log)),
+        ("peers_diagram", lambda: peer_diagram.run(mode, log)),
+        ("kernel_profile", lambda: profile_kernel.run(mode, log)),
+        ("converged_stopping", lambda: converged.run(mode, log)),
     ]
     failed = []
     for name, fn in plan:

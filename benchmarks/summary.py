@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import summary_peers
+
 
 def _f(x, fmt="{:.3g}"):
     if x is None or isinstance(x, str):
@@ -37,6 +39,7 @@ def write_summary(r):
         "| measure | value | target | verdict |",
         "|---|---|---|---|",
     ]
+    L += summary_peers.headline_rows(sec)
     wp = sec.get("work_precision")
     if wp:
         for key, row in wp["ratios"].items():
@@ -98,6 +101,7 @@ def write_summary(r):
         else:
             L.append(f"| peak RSS of file-backed sweeps | {me['status']} | flat | pending |")
     L.append("")
+    L += summary_peers.readme_rows(r)
 
     if wp:
         L += ["## Work-precision", "", "![work-precision](work_precision.png)", ""]
@@ -250,6 +254,12 @@ def write_summary(r):
         else:
             L.append(f"{me['status']}: {me.get('note', me.get('stderr', ''))}")
         L.append("")
+    if "peers_trajectory" in sec:
+        L += summary_peers.peers_trajectory(sec["peers_trajectory"])
+    if "peers_diagram" in sec:
+        L += summary_peers.peers_diagram(sec["peers_diagram"])
+    if "kernel_profile" in sec:
+        L += summary_peers.kernel_profile(sec["kernel_profile"])
     for name, v in r["sections"].items():
         if v.get("status") == "error":
             L += [f"## {name}: FAILED", "", "```", v["traceback"], "```", ""]

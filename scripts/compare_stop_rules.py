@@ -63,7 +63,11 @@ def compare(num: int, num_2d: int, tol: float, only: str | None):
         pts_c = conv.points.reshape(-1, *conv.points.shape[-2:])
         cnt_f, cnt_c = fixed.count.ravel(), conv.count.ravel()
         tc = conv.t_converged.ravel()
-        grid = np.stack(np.meshgrid(*values, indexing="ij"), -1).reshape(-1, len(values)) if isinstance(values, tuple) else values[:, None]
+        grid = (
+            np.stack(np.meshgrid(*values, indexing="ij"), -1).reshape(-1, len(values))
+            if isinstance(values, tuple)
+            else values[:, None]
+        )
         if cfg.sweep.get("mode") == "continuation-both":
             grid = np.concatenate([grid, grid])
         agree = 0
@@ -91,7 +95,10 @@ def compare(num: int, num_2d: int, tol: float, only: str | None):
             max_t=float(finite.max()) if finite.size else float("nan"),
             t_end=cfg.integration["t_end"], time_fixed=t_fixed, time_conv=t_conv,
         ))  # fmt: skip
-        print(f"{path.stem}: {agree}/{st_f.size} agree, {t_fixed:.1f} s -> {t_conv:.1f} s", file=sys.stderr)
+        print(
+            f"{path.stem}: {agree}/{st_f.size} agree, {t_fixed:.1f} s -> {t_conv:.1f} s",
+            file=sys.stderr,
+        )
     return rows, bad
 
 
@@ -121,7 +128,9 @@ def main() -> int:
     args.out.write_text("\n".join(lines) + "\n")
     if args.csv:
         with args.csv.open("w", newline="") as fh:
-            w = csv.DictWriter(fh, fieldnames=["config", "value", "fixed", "converged", "distance", "t_converged"])
+            w = csv.DictWriter(
+                fh, fieldnames=["config", "value", "fixed", "converged", "distance", "t_converged"]
+            )
             w.writeheader()
             w.writerows(bad)
     print("\n".join(lines))

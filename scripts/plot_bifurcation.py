@@ -3,9 +3,18 @@
 Usage::
 
     python scripts/plot_bifurcation.py OUT.h5 -o fig.png [--vars x1,phi1] [--period]
+    python scripts/plot_bifurcation.py CENSUS.h5 -o census.png [--vars x1,phi1]
 
-Reads only the HDF5 file written by :func:`stickslip_fast.sweep` (it simulates
-nothing). 1-D sweeps: one panel per variable kind (x, phi, dx, ...) with the
+Reads only the HDF5 file written by :func:`stickslip_fast.sweep` or
+:func:`stickslip_fast.census` (it simulates nothing).
+
+Census files (:func:`plot_census`): every attractor found at every value, its
+points coloured by track (one colour per attractor followed over the values),
+dot size and opacity growing with the basin fraction; equilibria (steady
+sliding) as solid lines and stalled motors as dashed lines in the track's
+colour; "unresolved" runs (no period <= 64) as faint clouds. Below, the basin
+fractions stacked against the parameter in the same colours (failed runs in
+black on top). See docs/census.md, "How to read a census figure". 1-D sweeps: one panel per variable kind (x, phi, dx, ...) with the
 Poincare points against the swept parameter as small rasterized dots; for
 N >= 2 the disks (x1, x2, ...) are overlaid in different colours on the same
 panel; for mode "continuation-both" the up and down branches are overlaid in two
@@ -35,6 +44,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -42,7 +52,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from stickslip_fast.io import read_sweep  # noqa: E402
 from stickslip_fast.poincare import STATUS_NAMES  # noqa: E402
 
-__all__ = ["plot_sweep", "plot_bifurcation", "plot_period_map", "main"]
+__all__ = ["plot_sweep", "plot_bifurcation", "plot_period_map", "plot_census", "main"]
 
 LABELS = {
     "x": "$x$",
@@ -281,6 +291,124 @@ def plot_period_map(data: dict[str, Any], title: str | None = None) -> plt.Figur
     return fig
 
 
+def _track_colour(track: int) -> Any:
+    cmap = plt.get_cmap("tab20")
+    return cmap((2 * track) % 20 + (track // 10) % 2)
+
+
+def plot_census(
+    result: Any,
+    variables: Sequence[str] | None = None,
+    *,
+    title: str | None = None,
+    max_legend: int = 12,
+) -> plt.Figure:
+    """Census figure: attractors by track over the parameter, and stacked basin fractions.
+
+    Parameters
+    ----------
+    result : CensusResult
+        What :func:`stickslip_fast.census.load_census` returns.
+    variables : sequence of str, optional
+        State names to draw (default x_i and phi_i); names of one kind share a panel.
+    title : str, optional
+    max_legend : int
+        Tracks named in the legend (those with the largest basin, summed over values).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    names = result.state_names
+    variables = list(variables) if variables else _default_vars(names)
+    for v in variables:
+        if v not in names:
+            raise ValueError(f"unknown variable {v!r}; the file has {names}")
+    kinds: list[str] = []
+    for v in variables:
+        if _split(v)[0] not in kinds:
+            kinds.append(_split(v)[0])
+    vals = np.asarray(result.values)
+    fr = result.fractions()
+    fig, axs = plt.subplots(
+        len(kinds) + 1, 1, sharex=True, figsize=(9.0, 2.4 * len(kinds) + 2.0),
+        gridspec_kw={"height_ratios": [3.0] * len(kinds) + [1.6]}, squeeze=False,
+    )  # fmt: skip
+    axs = axs[:, 0]
+    markers = ("o", "s", "^", "D")
+    for v in variables:
+        kind, disk = _split(v)
+        ax = axs[kinds.index(kind)]
+        col = names.index(v)
+        mk = markers[max(disk - 1, 0) % len(markers)]
+        for track in result.tracks:
+            colour = _track_colour(track.id)
+            if track.kind in ("equilibrium", "stalled"):
+                y = np.full(vals.size, np.nan)
+                for i in range(track.birth, track.death + 1):
+                    for a in result.attractors[i]:
+                        if a.id == track.id:
+                            y[i] = a.points[0, col]
+                lw = 1.0 + 2.5 * np.nanmax(fr[:, track.id])
+                ls = "-" if track.kind == "equilibrium" else "--"
+                ax.plot(vals, y, color=colour, lw=lw, ls=ls, alpha=0.85, solid_capstyle="butt")
+                lone = np.isfinite(y) & ~np.isfinite(np.roll(y, 1)) & ~np.isfinite(np.roll(y, -1))
+                ax.plot(vals[lone], y[lone], ls="none", marker="_", ms=7, mew=lw, color=colour)
+                continue
+            xs, ys, sz, al = [], [], [], []
+            for i in range(track.birth, track.death + 1):
+                for a in result.attractors[i]:
+                    if a.id != track.id:
+                        continue
+                    pts = a.points[:, col]
+                    faint = a.kind == "unresolved"
+                    xs.append(np.full(pts.size, vals[i]))
+                    ys.append(pts)
+                    sz.append(np.full(pts.size, (0.6 if faint else 1.0) + 3.0 * a.fraction))
+                    al.append(np.full(pts.size, (0.15 if faint else 0.35) + 0.65 * a.fraction))
+            if xs:
+                rgba = np.tile(matplotlib.colors.to_rgba(colour), (sum(x.size for x in xs), 1))
+                rgba[:, 3] = np.concatenate(al)
+                ax.scatter(np.concatenate(xs), np.concatenate(ys), s=np.concatenate(sz) ** 2,
+                           c=rgba, marker=mk, linewidths=0, rasterized=True)  # fmt: skip
+    for k, kind in enumerate(kinds):
+        axs[k].set_ylabel(LABELS.get(kind, kind) + r" at min $x_1$")
+    for ax in axs[:-1]:
+        ax.margins(y=0.08)
+    # stacked basin fractions, failed runs on top (runs not computed yet stay blank)
+    ax = axs[-1]
+    order = [t.id for t in result.tracks]
+    failed = np.mean((result.labels < 0) & (result.status_code >= 0), axis=1)
+    stack = [fr[:, t] for t in order] + [failed]
+    colours = [_track_colour(t) for t in order] + [FAIL_COLOUR]
+    ax.stackplot(vals, *stack, colors=colours, linewidth=0, step="mid")
+    ax.set_ylim(0, 1)
+    ax.set_ylabel("basin fraction")
+    ax.set_xlabel(PARAM_LABELS.get(result.param, result.param))
+    # legend: the largest tracks
+    total = fr.sum(axis=0)
+    top = sorted(order, key=lambda t: -total[t])[:max_legend]
+    handles = []
+    for t in sorted(top):
+        tr = result.tracks[t]
+        desc = tr.kind if tr.kind != "orbit" else "P" + "/P".join(map(str, tr.periods))
+        if tr.kind == "equilibrium":
+            desc = "steady sliding"
+        span = f"{vals[tr.birth]:g}-{vals[tr.death]:g}"
+        handles.append(Patch(facecolor=_track_colour(t), label=f"#{t} {desc} ({span})"))
+    if np.any(failed > 0):
+        handles.append(Patch(facecolor=FAIL_COLOUR, label="failed / no crossings"))
+    handles.append(Line2D([], [], color="0.3", lw=2, label="equilibrium (line)"))
+    handles.append(Line2D([], [], color="0.3", lw=2, ls="--", label="stalled motor (dashed)"))
+    axs[0].legend(handles=handles, fontsize=6.5, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  frameon=False, title="tracks (values)", title_fontsize=7)  # fmt: skip
+    n_s = len(result.starts)
+    default = f"census: {len(vals)} values x {n_s} starts"
+    axs[0].set_title(default if title is None else title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
 def plot_sweep(
     path: str | Path,
     out: str | Path,
@@ -311,6 +439,21 @@ def plot_sweep(
     Path
         ``out``.
     """
+    import h5py
+
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        kind = h5.attrs.get("kind")
+        file_title = str(h5.attrs.get("title", ""))
+    if kind == "census":
+        from stickslip_fast.census import load_census
+
+        res = load_census(path)
+        fig = plot_census(res, variables, title=title if title is not None else file_title or None)
+        out = Path(out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, dpi=dpi)
+        plt.close(fig)
+        return out
     data = read_sweep(path)
     data["path"] = str(path)
     if len(data["param"]) == 2:
@@ -327,7 +470,7 @@ def plot_sweep(
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry point."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("file", help="sweep result file (HDF5)")
+    p.add_argument("file", help="sweep or census result file (HDF5)")
     p.add_argument("-o", "--output", required=True, help="image file (.png, .pdf)")
     p.add_argument("--vars", help="comma-separated state names, e.g. x1,phi1 or x1,x2")
     p.add_argument("--period", action="store_true", help="add a period panel")

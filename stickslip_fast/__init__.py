@@ -5,9 +5,9 @@ Models the coupled translational-rotational disks-on-belts system of Kudra et al
 a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
-Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`;
-periodic orbits and their multipliers: :func:`find_orbit`, :func:`find_equilibrium`,
-:func:`continue_orbit` (docs/orbits.md).
+Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`,
+:func:`census`; periodic orbits and their multipliers: :func:`find_orbit`,
+:func:`find_equilibrium`, :func:`continue_orbit` (docs/orbits.md).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
+from .census import CensusResult, census, load_census
 from .continuation import Bifurcation, Branch, continue_orbit
 from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .poincare import STATUS_NAMES
@@ -40,6 +41,9 @@ __all__ = [
     "sweep",
     "SweepResult",
     "load_sweep",
+    "census",
+    "CensusResult",
+    "load_census",
     "MODES",
     "largest_lyapunov",
     "LyapunovResult",

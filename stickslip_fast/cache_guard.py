@@ -36,12 +36,12 @@ def fingerprint() -> str:
     Returns
     -------
     str
-        SHA-256 (hex) of every ``*.py`` file of the package (sorted by name)
+        SHA-256 (hex) of every ``*.py`` file of the package and its subpackages (sorted)
         and of the Numba version.
     """
     digest = hashlib.sha256(f"numba {numba.__version__}\n".encode())
-    for path in sorted(_PKG.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    for path in sorted(_PKG.rglob("*.py")):
+        digest.update(str(path.relative_to(_PKG)).encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()
 
 

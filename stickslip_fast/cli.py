@@ -1,4 +1,4 @@
-"""Command line: ``stickslip-fast simulate | sweep | info``.
+"""Command line: ``stickslip-fast simulate | sweep | census | info``.
 
 A thin layer over the public API: it parses a TOML config (see
 :mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
@@ -167,19 +167,100 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     sw = cfg.sweep
     integ = dict(cfg.integration)
     integ.setdefault("max_points", 256)
-    backend = "local"
-    if args.scheduler or args.workers:
-        backend = "dask"
-    res = sweep(
-        cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
-        chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
-        progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
-        n_workers=args.workers, title=cfg.title, notes=cfg.notes,
-        analyses=sw.get("analyses", ()), **integ,
-    )  # fmt: skip
+    backend = args.backend or ("dask" if args.scheduler or args.workers else "local")
+    try:
+        res = sweep(
+            cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
+            chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
+            progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
+            n_workers=args.workers, title=cfg.title, notes=cfg.notes,
+            analyses=sw.get("analyses", ()), **integ,
+        )  # fmt: skip
+    except RuntimeError as exc:
+        if backend != "cuda":
+            raise
+        raise ValueError(str(exc)) from None  # no GPU: one line, not a traceback
     if not args.quiet:
         print(_report(res.path) if res.path is not None else repr(res))
     return 0
+
+
+def _cmd_census(args: argparse.Namespace) -> int:
+    from .census import census
+
+    cfg = _config_from_args(args)
+    if cfg.census is None:
+        raise ConfigError(f"{cfg.source}: a census needs a [census] section with param and values")
+    c = dict(cfg.census)
+    integ = dict(cfg.integration)
+    if "stop" in integ:  # [integration].stop applies unless [census].stop says otherwise
+        if "stop" in c and c["stop"] != integ["stop"]:
+            raise ConfigError(
+                f"{cfg.source}: [integration].stop = {integ['stop']!r} and [census].stop = "
+                f"{c['stop']!r} disagree; give one"
+            )
+        c["stop"] = integ.pop("stop")
+    backend = "dask" if (args.scheduler or args.workers) else "local"
+    census(
+        cfg.system, c.pop("param"), c.pop("values"), out=args.output, threads=args.threads,
+        progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
+        n_workers=args.workers, title=cfg.title, notes=cfg.notes, **c, **integ,
+    )  # fmt: skip
+    if not args.quiet:
+        print(_census_report(args.output))
+    return 0
+
+
+def _census_report(path) -> str:
+    """A text summary of a census file: configuration, progress, attractors per value."""
+    import h5py
+
+    from .census import load_census
+    from .poincare import STATUS_NAMES
+
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        attrs = dict(h5.attrs)
+    cfg = json.loads(attrs["config"])
+    res = load_census(path)
+    done = res.raw["done"].astype(bool)
+    lines = [f"file:      {path}  (census)"]
+    if attrs.get("title"):
+        lines.append(f"title:     {attrs['title']}")
+    lines.append(
+        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
+        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
+    )
+    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
+    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    v = res.values
+    lines.append(
+        f"census:    {res.param} in [{v.min():g}, {v.max():g}] ({v.size} values) x "
+        f"{len(res.starts)} starts, stop={cfg['stop']}"
+    )
+    st = cfg["settings"]
+    lines.append(
+        f"settings:  method={st['method']} rtol={st['rtol']:g} atol={st['atol']:g} "
+        f"t_end={st['t_end']:g} t_transient={st['t_transient']:g} max_points={st['max_points']}"
+    )
+    lines.append(
+        f"progress:  {int(done.sum())} of {done.size} runs done ({100 * done.mean():.1f}%)"
+    )
+    if done.any():
+        codes, counts = np.unique(res.status_code[done], return_counts=True)
+        lines.append(
+            "status:    " + ", ".join(f"{STATUS_NAMES[c]} {n}" for c, n in zip(codes, counts))
+        )
+        lines.append(f"tracks:    {len(res.tracks)} (classified from the runs done so far)"
+                     if not done.all() else f"tracks:    {len(res.tracks)}")  # fmt: skip
+        for t in res.tracks:
+            desc = t.kind if t.kind != "orbit" else f"orbit P{'/P'.join(map(str, t.periods))}"
+            frac = res.fractions()[t.birth : t.death + 1, t.id]
+            lines.append(
+                f"  #{t.id:<3d} {desc:<22s} {res.param} {v[t.birth]:g}..{v[t.death]:g}"
+                f"{'  born' if t.born else ''}{'  dies' if t.dies else ''}"
+                f"  basin {frac.min():.2f}-{frac.max():.2f}"
+            )
+    return "\n".join(lines)
 
 
 def _report(path, verify: bool = False) -> str:
@@ -290,6 +371,16 @@ def _trajectory_report(path, h5) -> str:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
+    from .io import file_kind
+
+    if file_kind(args.file) == "census":
+        print(_census_report(args.file))
+        if args.json:
+            import h5py
+
+            with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
+                print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+        return 0
     print(_report(args.file, verify=True))
     if args.json:
         from .io import file_kind, open_h5, sweep_summary
@@ -327,7 +418,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
     p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
     p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.add_argument(
+        "--backend",
+        choices=("local", "dask", "cuda"),
+        help="where values run (default: local, or dask with --scheduler/--workers); "
+        "cuda: one GPU thread per value (docs/gpu.md)",
+    )
     p.set_defaults(func=_cmd_sweep)
+
+    p = sub.add_parser("census", help="attractor census: every start at every value (resumable)")
+    _add_common(p)
+    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="HDF5 result file")
+    p.add_argument("--threads", type=int, help="Numba threads (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.set_defaults(func=_cmd_census)
 
     p = sub.add_parser("info", help="summarise a result file")
     p.add_argument("file", metavar="OUT.h5")

@@ -35,6 +35,16 @@ Layout (every section optional except what the command needs)::
     chunk_size = 64
     analyses = ["sync"]                            # extra per-value results (io.ANALYSES)
 
+    [census]              # stickslip-fast census: every start at every value
+    param = "eta"
+    values = { start = 1.0, stop = 10.0, num = 200 }
+    n_starts = 64         # the zero state included (include_zero = true)
+    seed = 0
+    # box = [[lo, hi], ...]     one pair per state variable (default: census.default_box)
+    # starts = [[...], ...]     explicit initial states instead of the sampler
+    stop = "fixed"        # fixed | converged
+    # identity_tol, track_threshold, chunk_size
+
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
 """
 
@@ -74,6 +84,10 @@ _SECTIONS = {
     "integration": set(_SETTING_TYPES),  # every field of Settings
     "simulate": {"sample_dt"},
     "sweep": {"param", "values", "mode", "chunk_size", "analyses"},
+    "census": {
+        "param", "values", "n_starts", "seed", "include_zero", "box", "starts", "stop",
+        "chunk_size", "identity_tol", "track_threshold",
+    },
 }  # fmt: skip
 
 
@@ -90,6 +104,7 @@ class RunConfig:
     y0: np.ndarray | None = None
     sample_dt: float | None = None
     sweep: dict[str, Any] | None = None
+    census: dict[str, Any] | None = None
     title: str = ""
     notes: str = ""
     source: str = ""
@@ -254,6 +269,8 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         if "analyses" in sw:
             sweep["analyses"] = _analyses(sw["analyses"])
 
+    census = _parse_census(data["census"]) if "census" in data else None
+
     title = data.get("title", "")
     notes = data.get("notes", "")
     if not isinstance(title, str) or not isinstance(notes, str):
@@ -264,11 +281,56 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         y0=y0,
         sample_dt=None if sample_dt is None else float(sample_dt),
         sweep=sweep,
+        census=census,
         title=title,
         notes=notes,
         source=source,
         raw=data,
     )
+
+
+def _parse_census(table: dict[str, Any]) -> dict[str, Any]:
+    """Validate a ``[census]`` table (types only; census() checks the values)."""
+    sw = dict(table)
+    if "param" not in sw or "values" not in sw:
+        raise ConfigError("[census] needs 'param' and 'values'")
+    if not isinstance(sw["param"], str):
+        raise ConfigError(f"[census].param must be a string, got {sw['param']!r}")
+    out: dict[str, Any] = {
+        "param": sw["param"],
+        "values": _values_from_spec(sw["values"], "[census].values"),
+    }
+    for key in ("n_starts", "seed", "chunk_size"):
+        if key in sw:
+            v = sw[key]
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise ConfigError(f"[census].{key} must be an integer, got {v!r}")
+            out[key] = v
+    for key in ("identity_tol", "track_threshold"):
+        if key in sw:
+            v = sw[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ConfigError(f"[census].{key} must be a number, got {v!r}")
+            out[key] = float(v)
+    if "include_zero" in sw:
+        if not isinstance(sw["include_zero"], bool):
+            raise ConfigError(
+                f"[census].include_zero must be true or false, got {sw['include_zero']!r}"
+            )
+        out["include_zero"] = sw["include_zero"]
+    if "stop" in sw:
+        if not isinstance(sw["stop"], str):
+            raise ConfigError(f"[census].stop must be a string, got {sw['stop']!r}")
+        out["stop"] = sw["stop"]
+    for key in ("box", "starts"):
+        if key in sw:
+            try:
+                out[key] = np.asarray(sw[key], dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise ConfigError(
+                    f"[census].{key} must be a list of lists of numbers: {exc}"
+                ) from None
+    return out
 
 
 def load_config(path: str | Path) -> RunConfig:

@@ -152,7 +152,7 @@ def _reset_stop(stop) -> None:
     stop.state[S_PERIOD] = 0.0
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _at_rest(stop, y) -> bool:
     tol = stop.equilibrium_tol
     for i in range(stop.n_osc):
@@ -161,7 +161,7 @@ def _at_rest(stop, y) -> bool:
     return True
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _converged_now(stop, obs, t, y) -> bool:
     """STOP_CONVERGED: watch for rest and for repeating points; see :class:`StopRule`."""
     st = stop.state
@@ -227,7 +227,7 @@ def alloc_poincare_observer(section, t_transient, max_points, n_samples, sample_
 
 
 # ------------------------------------------------------------------ section
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def locate_crossing(kind: int, y0, y1, D, comp: int, up: bool) -> float:
     """theta in [0, 1] where component ``comp`` of the dense output crosses 0.
 
@@ -272,7 +272,7 @@ def locate_crossing(kind: int, y0, y1, D, comp: int, up: bool) -> float:
     return theta
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _crosses(section, y0, y1) -> bool:
     c = section.component
     if section.up:

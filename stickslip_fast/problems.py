@@ -129,7 +129,7 @@ def alloc_bordered_linear(n_osc: int, n_total: int) -> BorderedLinear:
 
 
 # ----------------------------------------------------------- default algorithms
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def error_norm(err: np.ndarray, y0: np.ndarray, y1: np.ndarray, rtol: float, atol: float) -> float:
     """RMS norm of err scaled by atol + rtol max(|y0|, |y1|)."""
     n = err.size

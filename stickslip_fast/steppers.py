@@ -170,7 +170,7 @@ def stepper_dense_kind(method):  # noqa: ARG001
 
 
 # --------------------------------------------------------------------------- ERK
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def erk_step(A, b, b_err, prob, y0, h, K, ytmp, y1, err) -> None:
     """One explicit RK step (FSAL): K[0] must hold f(y0) on entry.
 
@@ -261,7 +261,7 @@ def _accept(method, prob, lin, y, ws, modified):
         return impl
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def _stage_combination(M, K, scale, D) -> None:
     """D = scale * M K: dense-output coefficients from the stages (M is rows x stages)."""
     s = M.shape[1]
@@ -290,7 +290,7 @@ def _dense_kind(method):
 
 
 # -------------------------------------------------------------------- Rosenbrock
-@njit(**_JIT)
+@njit(inline="always", **_JIT)
 def rosenbrock_step(gamma, a, C, b, b_err, prob, lin, y0, f0, h, K, ytmp, ftmp, y1, err) -> bool:
     """One Rosenbrock-Wanner step for an autonomous system (transformed form).
 

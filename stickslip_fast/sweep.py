@@ -3,13 +3,15 @@
 :func:`sweep` validates its arguments into a :class:`_Plan` (what to compute),
 opens a store for the results (:class:`~stickslip_fast.io.SweepFile`, or its
 in-memory twin :class:`~stickslip_fast.io.MemoryStore`), cuts the work into
-units (:mod:`stickslip_fast.chunks`), hands them to a backend (local, or Dask
-in :mod:`stickslip_fast.backends`) and writes each computed unit to the store.
+units (:mod:`stickslip_fast.chunks`), hands them to a backend (local, Dask
+in :mod:`stickslip_fast.backends`, or the GPU in
+:mod:`stickslip_fast.cuda_backend`) and writes each computed unit to the store.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import sys
 import warnings
@@ -48,7 +50,7 @@ __all__ = [
 ]
 
 MODES = ("restart", "continuation", "continuation-both")
-BACKENDS = ("local", "dask")
+BACKENDS = ("local", "dask", "cuda")
 
 
 # ----------------------------------------------------------------- validation
@@ -153,6 +155,7 @@ class _Plan:
     settings: Settings
     y0: np.ndarray
     analyses: tuple[str, ...]
+    backend: str = "local"
 
     @property
     def layout(self) -> SweepLayout:
@@ -178,6 +181,8 @@ class _Plan:
         }
         if self.analyses:  # absent when empty, so files made before analyses existed resume
             config["analyses"] = list(self.analyses)
+        if self.backend == "cuda":  # GPU points differ from the CPU's at ~1e-9: never mixed
+            config["backend"] = "cuda"
         return config
 
 
@@ -204,7 +209,7 @@ def _plan(system, param, values, mode, y0, analyses, settings: Settings) -> _Pla
 def _check_backend(backend: str, scheduler, n_workers) -> None:
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if backend == "local" and (scheduler is not None or n_workers is not None):
+    if backend != "dask" and (scheduler is not None or n_workers is not None):
         raise ValueError("scheduler and n_workers are only used with backend='dask'")
 
 
@@ -316,6 +321,13 @@ def _run_analyses(unit: WorkUnit, res: dict, plan: _Plan) -> dict:
     return res
 
 
+def _cuda_runner(system: System, settings: Settings, mode: str):
+    """The CUDA runner (:func:`stickslip_fast.cuda_backend.cuda_runner`), imported on demand."""
+    from .cuda_backend import cuda_runner
+
+    return cuda_runner(system, settings, mode)
+
+
 def _dask_runner(scheduler: str | None, n_workers: int | None):
     """The Dask runner; imported on demand because importing distributed is slow."""
     from .backends import dask_runner
@@ -390,8 +402,13 @@ def sweep(
         Numba threads for this sweep (default: all). Results do not depend on it.
     progress : bool, optional
         tqdm progress bar; default: only when stderr is a terminal.
-    backend : {"local", "dask"}
-        Where units run. ``"dask"`` (extra ``stickslip_fast[dask]``) uses
+    backend : {"local", "dask", "cuda"}
+        Where units run. ``"cuda"`` (extra ``stickslip_fast[cuda]``) runs
+        restart sweeps one trajectory per GPU thread (N <= 4, Rodas5P, stop
+        "fixed"; the rest falls back to the CPU with a warning); it raises a
+        RuntimeError without a GPU. Its status and period equal the CPU's, its
+        points agree to ~1e-9 (not bit-identical), so it is part of the
+        configuration: a file is all-CPU or all-GPU. See docs/gpu.md. ``"dask"`` (extra ``stickslip_fast[dask]``) uses
         ``scheduler`` (an address such as ``"tcp://host:8786"``) or starts a
         LocalCluster of ``n_workers`` single-threaded processes (default: one
         per core) for this sweep. Results arrive in any order and only this
@@ -430,8 +447,12 @@ def sweep(
     plan = _plan(system, param, values, mode, y0, analyses, settings)
     _check_backend(backend, scheduler, n_workers)
     _check_chunk_size(chunk_size)
-    # resolved before any file is touched: a missing extra or a bad address fails first
-    runner = run_local if backend == "local" else _dask_runner(scheduler, n_workers)
+    if backend == "cuda":
+        plan = dataclasses.replace(plan, backend="cuda")
+        runner = _cuda_runner(system, settings, mode)
+    else:
+        # resolved before any file is touched: a missing extra or a bad address fails first
+        runner = run_local if backend == "local" else _dask_runner(scheduler, n_workers)
 
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))

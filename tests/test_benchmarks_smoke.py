@@ -25,7 +25,7 @@ def test_quick_benchmark_suite(tmp_path):
         [sys.executable, str(ROOT / "benchmarks" / "run.py"), "--quick", "--out", str(out)],
         capture_output=True,
         text=True,
-        timeout=170,
+        timeout=900,
         cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
@@ -41,6 +41,9 @@ def test_quick_benchmark_suite(tmp_path):
         "n_scaling",
         "startup",
         "memory",
+        "peers_trajectory",
+        "peers_diagram",
+        "kernel_profile",
     }
     wp = sec["work_precision"]
     assert set(wp["trajectories"]) == {
@@ -60,7 +63,25 @@ def test_quick_benchmark_suite(tmp_path):
     assert sec["n_scaling"]["rows"][0]["N"] == 1
     assert sec["startup"]["cached_start_s"] > 0
     assert sec["memory"]["status"] in ("ok", "pending")
+    # peers: the engine and SciPy LSODA always run; optional peers are either run or explained
+    pt = sec["peers_trajectory"]["cases"]["asymmetric_eta9.99"]
+    rows = pt["tables"]["1e-06"]["rows"]
+    assert rows["engine rodas5p"]["time_points"] > 0
+    assert rows["scipy LSODA"]["rtol"] is not None
+    for name, r in rows.items():  # the chosen setting really meets the target (vs SciPy Radau)
+        if r.get("rtol") is not None:
+            assert r["error"] <= 1e-6, name
+    pd = sec["peers_diagram"]
+    assert pd["solvers"]["engine rodas5p"]["scans"]
+    assert sum(pd["ref_status_counts"].values()) == pd["config"]["n_values"]
+    # the replica Rodas5P driver (dense 4x4, same tableau) is itself accurate against the
+    # independent SciPy Radau reference: rtol 1e-7 gives points within 1e-5
+    pk = sec["kernel_profile"]
+    row = pk["cases"]["asymmetric_eta9.99"][0]
+    assert row["replica rodas5p"]["error"] <= 1e-5
+    assert pk["ingredients_ns_plain_4x4"]["rhs"] > 0
     summary = (out / "summary.md").read_text()
     assert "## Headline" in summary
+    assert "## Peers: per-trajectory" in summary and "## Kernel profile" in summary
     assert (out / "work_precision.png").stat().st_size > 0
     assert (out / "n_scaling.png").stat().st_size > 0

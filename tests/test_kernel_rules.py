@@ -63,13 +63,11 @@ def test_eps_1e103_ends_within_max_steps():
     # eps^3 overflows: every stage is NaN, the step size becomes NaN. Before, the
     # rejected-step loop never ended (max_steps counted accepted steps only).
     s = ssf.System.preset("asymmetric", eta=2.0, eps=1e103)
-    t0 = time.perf_counter()
     r = ssf.simulate(s, 300.0, 200.0, y0=[0.01, 0, 0, 0], max_steps=1000)
     assert r.status in ("nonfinite", "step-underflow", "max-steps")
     assert r.n_steps + r.n_rejected <= 2000
     r = ssf.sweep(ASYM, "eps", [1e-5, 1e103], max_steps=100_000, **KW)
     assert r.status[0] == "ok" and r.status[1] in FAILURE_STATUSES
-    assert time.perf_counter() - t0 < 120  # generous: only a hang can fail this
 
 
 def test_continuation_continues_from_the_last_good_state():

@@ -1,0 +1,227 @@
+"""The CUDA backend, run in numba's CUDA simulator (CI has no GPU).
+
+The reference is the CPU backend (``backend="local"``, itself checked against
+SciPy elsewhere): status and period must be identical, Poincare points within
+1e-9. On a GPU the points are not bit-identical (fused multiply-adds); in the
+simulator, which runs the kernel as Python, they happen to be. Cost: ~25 s on a
+2-core VM (the simulator runs ~2 000 Rodas5P steps per second).
+"""
+
+import os
+import subprocess
+import sys
+import textwrap
+import warnings
+
+import numpy as np
+import pytest
+
+# numba.cuda chooses the simulator or the driver when it is first imported, from
+# numba's config (numba.core.config, read from the environment when numba was
+# imported, and re-read by reload_config()).
+if "numba.cuda" not in sys.modules:
+    import numba.core.config as _numba_config
+
+    _old = os.environ.get("NUMBA_ENABLE_CUDASIM")
+    os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+    _numba_config.reload_config()
+    try:
+        pytest.importorskip("numba_cuda", reason="numba-cuda (the [cuda] extra) is not installed")
+        from numba import cuda  # noqa: F401  (binds the simulator for this process)
+    finally:
+        if _old is None:
+            del os.environ["NUMBA_ENABLE_CUDASIM"]
+        else:
+            os.environ["NUMBA_ENABLE_CUDASIM"] = _old
+        _numba_config.reload_config()
+else:
+    pytest.importorskip("numba_cuda", reason="numba-cuda (the [cuda] extra) is not installed")
+
+import stickslip_fast as ssf  # noqa: E402
+from stickslip_fast import cuda_backend  # noqa: E402
+from stickslip_fast.io import ConfigMismatchError  # noqa: E402
+from stickslip_fast.sweep import sweep  # noqa: E402
+
+if not cuda_backend.simulator_enabled():  # pragma: no cover - numba.cuda imported earlier
+    pytest.skip("numba.cuda was imported without the simulator", allow_module_level=True)
+
+POINT_TOL = 1e-9
+ASYM = ssf.System.preset("asymmetric")
+
+
+def _agree(gpu, cpu):
+    """Status and period identical; points within POINT_TOL, NaN in the same places."""
+    np.testing.assert_array_equal(gpu.status, cpu.status)
+    np.testing.assert_array_equal(gpu.period, cpu.period)
+    np.testing.assert_array_equal(gpu.count, cpu.count)
+    np.testing.assert_array_equal(gpu.n_crossings, cpu.n_crossings)
+    for f in ("points", "t_points", "final_state"):
+        a, b = getattr(gpu, f), getattr(cpu, f)
+        np.testing.assert_array_equal(np.isnan(a), np.isnan(b), err_msg=f)
+        np.testing.assert_allclose(a, b, rtol=0, atol=POINT_TOL, err_msg=f)
+
+
+def test_constant_belt_matches_cpu():
+    # max_points=4 < the crossings of the window: the device unrolls its ring buffer
+    kw = dict(t_end=120.0, t_transient=50.0, max_points=4, progress=False)
+    eta = np.array([1.5, 2.0, 5.0, 9.99])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # values with no orbit
+        gpu = sweep(ASYM, "eta", eta, backend="cuda", **kw)
+        cpu = sweep(ASYM, "eta", eta, backend="local", **kw)
+    _agree(gpu, cpu)
+    # the comparison covers values with a period and a value without one yet
+    assert np.any(cpu.period > 0) and np.any(cpu.period == 0)
+    assert np.any(cpu.n_crossings > 4)
+
+
+def test_dc_motor_two_disks_matches_cpu():
+    # N = 2 with the DC motor: the bordered (Schur complement) solve; eta > v_b0 / beta stalls
+    two = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=2)
+    y0 = [0, 0, 0, 0, 0.01, 0.01, 0.01, 0.01, 0]
+    kw = dict(t_end=60.0, t_transient=20.0, y0=y0, max_points=8, progress=False)
+    eta = np.array([3.0, 9.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        gpu = sweep(two, "eta", eta, backend="cuda", **kw)
+        cpu = sweep(two, "eta", eta, backend="local", **kw)
+    _agree(gpu, cpu)
+    assert gpu.points.shape[-1] == 9
+
+
+def test_failed_runs_match_cpu():
+    # max_steps cuts the long value short: "max-steps", no points; the short one finishes
+    kw = dict(t_end=40.0, t_transient=10.0, max_points=4, max_steps=1000, progress=False)
+    eta = np.array([2.0, 5.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        gpu = sweep(ASYM, "eta", eta, backend="cuda", **kw)
+        cpu = sweep(ASYM, "eta", eta, backend="local", **kw)
+    _agree(gpu, cpu)
+    assert list(cpu.status) == ["max-steps", "ok"]
+
+
+def test_2d_map_to_file_resumes_and_is_never_mixed_with_cpu(tmp_path):
+    out = tmp_path / "map.h5"
+    axes = (np.array([2.0, 6.0]), np.array([-0.3, 0.2]))
+    kw = dict(t_end=40.0, t_transient=20.0, max_points=6, progress=False, chunk_size=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        gpu = sweep(ASYM, ("eta", "k12"), axes, backend="cuda", out=out, **kw)
+        cpu = sweep(ASYM, ("eta", "k12"), axes, backend="local", **kw)
+        _agree(gpu, cpu)
+        assert gpu.shape == (2, 2)
+        # resume: the finished file is recognised, nothing is recomputed
+        again = sweep(ASYM, ("eta", "k12"), axes, backend="cuda", out=out, **kw)
+        np.testing.assert_array_equal(again.points, gpu.points)
+        # GPU and CPU points differ at ~1e-9, so a file is all-GPU or all-CPU
+        with pytest.raises(ConfigMismatchError, match="backend"):
+            sweep(ASYM, ("eta", "k12"), axes, backend="local", out=out, **kw)
+
+
+def test_cli_backend_cuda(tmp_path, capsys):
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        '[system]\npreset = "asymmetric"\n[integration]\nt_end = 30.0\nt_transient = 10.0\n'
+        'max_points = 4\n[sweep]\nparam = "eta"\nvalues = [2.0, 5.0]\n'
+    )
+    out = tmp_path / "o.h5"
+    assert main(["sweep", str(cfg), "-o", str(out), "--quiet", "--backend", "cuda"]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        cpu = sweep(ASYM, "eta", [2.0, 5.0], t_end=30.0, t_transient=10.0, max_points=4,
+                    progress=False)  # fmt: skip
+    _agree(ssf.load_sweep(out), cpu)
+    # the same command with the CPU backend is a different configuration: refused
+    assert main(["sweep", str(cfg), "-o", str(out), "--quiet"]) == 2
+    assert "backend" in capsys.readouterr().err
+
+
+def test_falls_back_to_cpu_with_a_warning():
+    kw = dict(t_end=10.0, t_transient=5.0, max_points=4, progress=False)
+    eta = np.array([2.0])
+    cases = [
+        (ASYM, dict(mode="continuation"), "continuation"),
+        (ssf.System.preset("asymmetric", n_oscillators=5), {}, "N <= 4"),
+        (ASYM, dict(method="dopri5"), "rodas5p"),
+        (ASYM, dict(stop="converged"), "stop='fixed'"),
+    ]
+    for system, extra, why in cases:
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            gpu = sweep(system, "eta", eta, backend="cuda", **kw, **extra)
+            cpu = sweep(system, "eta", eta, backend="local", **kw, **extra)
+        msgs = [str(w.message) for w in rec]
+        assert any(why in m and "runs on the CPU" in m for m in msgs), msgs
+        np.testing.assert_array_equal(gpu.points, cpu.points)  # the CPU kernels themselves
+        np.testing.assert_array_equal(gpu.status, cpu.status)
+
+
+def test_kernel_sizes_are_checked():
+    with pytest.raises(ValueError, match="n_osc"):
+        cuda_backend.get_kernel(5, False)
+
+
+def test_without_a_gpu_the_error_says_so():
+    # a fresh process without the simulator; on a machine with a GPU there is nothing to test
+    code = textwrap.dedent(
+        """
+        import numpy as np, stickslip_fast as ssf
+        from numba import cuda
+        if cuda.is_available():
+            print("HAS-GPU"); raise SystemExit
+        try:
+            ssf.sweep(ssf.System.preset("asymmetric"), "eta", np.array([2.0]), t_end=1.0,
+                      backend="cuda", progress=False)
+        except RuntimeError as exc:
+            print("ERROR:", exc)
+        """
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+    res = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+    )
+    if "HAS-GPU" in res.stdout:
+        pytest.skip("this machine has a GPU")
+    assert "ERROR:" in res.stdout, res.stdout + res.stderr
+    assert "needs an NVIDIA GPU" in res.stdout and "NUMBA_ENABLE_CUDASIM" in res.stdout
+
+
+def test_kernels_compile_for_the_real_cuda_target():
+    # The simulator runs the kernel as Python and cannot tell whether it compiles for
+    # a GPU. compile_ptx compiles the N = 2 DC-motor kernel (the bordered solve) and
+    # the model functions it calls to PTX, with NVVM but without a GPU. ~15 s.
+    try:
+        from cuda.pathfinder import load_nvidia_dynamic_lib
+
+        for lib in ("nvvm", "nvrtc"):
+            load_nvidia_dynamic_lib(lib)
+    except Exception as exc:  # noqa: BLE001 - any failure means: not available here
+        pytest.skip(f"no NVVM/NVRTC here (install the [cuda] extra): {type(exc).__name__}")
+    code = textwrap.dedent(
+        """
+        from stickslip_fast import cuda_backend as cb
+        try:
+            ptx = cb.compile_ptx(2, True, (8, 0))
+        except Exception as exc:  # no NVVM / NVRTC in this environment
+            text = f"{type(exc).__name__}: {exc}"
+            if any(s in text.lower() for s in ("nvvm", "nvrtc", "dynamiclibnotfound", "libdevice")):
+                print("NO-NVVM", text[:300]); raise SystemExit
+            raise
+        print("ENTRY" if ".entry" in ptx else "NO-ENTRY", ".target sm_80" in ptx)
+        """
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+    res = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600
+    )
+    if "NO-NVVM" in res.stdout:
+        pytest.skip("no NVVM here (install the [cuda] extra): " + res.stdout.strip())
+    assert res.returncode == 0, res.stdout + res.stderr[-3000:]
+    assert "ENTRY True" in res.stdout, res.stdout
