@@ -283,8 +283,21 @@ def _minimal_period(points: np.ndarray, tol: float) -> int:
 
 # ------------------------------------------------------------------ orbits
 def _start_from(system: System, start: Any, period: int | None, t_max: float):
-    """(z on the section, period) from a state or a SimulationResult."""
+    """(z on the section, period) from a state, a SimulationResult or a census Attractor."""
+    from .census import Attractor
+
     n = system.n_state
+    if isinstance(start, Attractor):
+        if start.kind != "orbit" or start.period < 1:
+            raise ValueError(
+                f'start is a census attractor of kind {start.kind!r}; only an "orbit" '
+                "has a period to find (use find_equilibrium for rest points)"
+            )
+        pts = np.asarray(start.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != n or not np.all(np.isfinite(pts)):
+            raise ValueError(f"start (a census attractor) has points of shape {pts.shape}, "
+                             f"not (period, {n}) finite values of this system")  # fmt: skip
+        return pts[0].copy(), start.period if period is None else period
     if isinstance(start, SimulationResult):
         if start.system != system:
             raise ValueError("start is a SimulationResult of a different system")
@@ -335,13 +348,15 @@ def find_orbit(
     Parameters
     ----------
     system : System
-    start : array_like or SimulationResult
+    start : array_like, SimulationResult or census Attractor
         A state (on the section dx1 = 0 or not: a state off it is first flowed
-        to its next upward crossing), or a :func:`simulate` result whose last
-        Poincare point is the start (e.g. one run with ``stop="converged"``).
+        to its next upward crossing), a :func:`simulate` result whose last
+        Poincare point is the start (e.g. one run with ``stop="converged"``),
+        or an attractor of a :func:`census` of kind "orbit" (its first point;
+        ``system`` must be the census's system at that attractor's value).
     period : int, optional
         p >= 1, the number of section crossings per period. Default: the
-        SimulationResult's detected period, or, for a state, the period a
+        SimulationResult's or attractor's period, or, for a state, the period a
         converged simulation from it finds.
     tol : float
         Convergence: max |P^p(z) - z| <= tol over the section coordinates.

@@ -8,6 +8,7 @@ independent NumPy model's Jacobian (tests/reference/scipy_model.py). About 15 s 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -173,6 +174,18 @@ def test_failures_are_reported_never_silent(converged):
     # no crossing within t_max (a period is 9.6): the map cannot be evaluated
     o3 = ssf.find_orbit(s, r, 1, t_max=1.0)
     assert o3.status == "integration-failed" and not o3.converged and np.isnan(o3.T)
+
+
+def test_census_attractor_as_start():
+    s = ssf.System.preset("asymmetric", eta=9.99)
+    c = ssf.census(s, "eta", [9.99], t_end=3000.0, stop="converged", n_starts=2, progress=False)
+    att = [a for a in c.attractors[0] if a.kind == "orbit"][0]
+    o = ssf.find_orbit(s, att)
+    assert o.converged and o.period == att.period == 2
+    np.testing.assert_allclose(o.points, att.points, rtol=0, atol=1e-6)
+    rest = dataclasses.replace(att, kind="equilibrium", period=0)
+    with pytest.raises(ValueError, match="start"):
+        ssf.find_orbit(s, rest)
 
 
 def test_period_detected_from_a_state():
