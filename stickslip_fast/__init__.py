@@ -6,7 +6,8 @@ a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
 Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`,
-:func:`census`.
+:func:`census`; periodic orbits and their multipliers: :func:`find_orbit`,
+:func:`find_equilibrium`, :func:`continue_orbit` (docs/orbits.md).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
 from .census import CensusResult, census, load_census
+from .continuation import Bifurcation, Branch, continue_orbit
+from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
@@ -47,6 +50,13 @@ __all__ = [
     "phases_from_events",
     "SyncResult",
     "sync_error",
+    "find_orbit",
+    "Orbit",
+    "find_equilibrium",
+    "Equilibrium",
+    "continue_orbit",
+    "Branch",
+    "Bifurcation",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",

@@ -1,0 +1,493 @@
+"""Pseudo-arclength continuation of periodic orbits (fixed points of the Poincare map).
+
+:func:`continue_orbit` follows a fixed point z(s) of P^p(., lambda) in (z, lambda), where
+lambda is one :class:`System` field, through folds onto the unstable side. At every point it
+records the Floquet multipliers (the variational Jacobian of :mod:`stickslip_fast.orbits`)
+and detects and locates folds (lambda turns back; a multiplier through +1),
+period-doublings (a real multiplier through -1) and Neimark-Sacker points (a complex pair
+through the unit circle). The method and its limits: docs/orbits.md.
+
+The continuation core (:func:`pseudo_arclength`) works on any smooth map given as a
+callable, so it is tested on maps whose bifurcations are known in closed form.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .orbits import EQUILIBRIUM_SPEED, SECTION_INDEX, Orbit, _field, return_map
+from .system import SWEEPABLE
+
+__all__ = ["Branch", "Bifurcation", "continue_orbit", "pseudo_arclength", "BRANCH_SCHEMA"]
+
+#: Version of the HDF5 layout written by :meth:`Branch.to_hdf5`.
+BRANCH_SCHEMA = 1
+
+# evaluate(x) -> (ok, G (m,), DG (m, m + 1), A (m, m)): residual, its Jacobian in (z, lambda),
+# and the map's Jacobian in z (whose eigenvalues are the multipliers)
+Evaluator = Callable[[np.ndarray], tuple[bool, np.ndarray, np.ndarray, np.ndarray]]
+
+
+@dataclass
+class Bifurcation:
+    """A located bifurcation or branch end.
+
+    ``kind``: "fold", "period-doubling", "neimark-sacker", or "section-grazing" (the
+    return map is discontinuous there: the period in time jumps because a crossing of
+    dx1 = 0 appears or vanishes; the branch of P^p ends). ``value``: the parameter;
+    ``index``: the branch point just before it (for "section-grazing": the last point,
+    within ``ds_min`` in arclength of the event); ``point``: the state there.
+    """
+
+    kind: str
+    value: float
+    index: int
+    point: np.ndarray
+
+    @property
+    def label(self) -> str:
+        return {"fold": "F", "period-doubling": "PD", "neimark-sacker": "NS",
+                "section-grazing": "G"}[self.kind]  # fmt: skip
+
+
+@dataclass
+class Branch:
+    """A branch of periodic orbits from :func:`continue_orbit`.
+
+    Attributes
+    ----------
+    system : System
+        The system of the start (its ``param`` field is the start's value).
+    param : str
+        The continued :class:`System` field.
+    period : int
+    values : ndarray, shape (k,)
+        The parameter at each point.
+    points : ndarray, shape (k, n_state)
+        The orbit's state on the section (dx1 = 0) at each point; the crossing
+        continued from the start orbit's ``points[0]``.
+    T : ndarray, shape (k,)
+        Period in time.
+    multipliers : ndarray of complex, shape (k, n_state - 1)
+        Floquet multipliers, largest modulus first.
+    stable : ndarray of bool, shape (k,)
+    bifurcations : list of Bifurcation
+    status : str
+        Why the branch ended: "bounds" (the last point is the first one outside
+        them), "max-points", "step-too-small" (the corrector failed at ds_min)
+        or "nonsmooth" (a section grazing, recorded in ``bifurcations``).
+    """
+
+    system: Any
+    param: str
+    period: int
+    values: np.ndarray
+    points: np.ndarray
+    T: np.ndarray
+    multipliers: np.ndarray
+    stable: np.ndarray
+    bifurcations: list[Bifurcation] = field(default_factory=list)
+    status: str = ""
+
+    def to_hdf5(self, path: str | Path) -> Path:
+        """Write the branch to HDF5 (schema: docs/orbits.md, "Branch files").
+
+        Datasets ``values`` (point), ``points`` (point, state), ``T`` (point),
+        ``multipliers_real`` / ``multipliers_imag`` (point, multiplier), ``stable``
+        (point), ``bifurcation_kind`` / ``bifurcation_value`` / ``bifurcation_index``
+        (bifurcation); attributes ``kind = "branch"``, ``schema_version``, ``param``,
+        ``period``, ``status`` and ``system`` (JSON). Readable with
+        ``xarray.open_dataset(path, engine="h5netcdf", phony_dims="sort")``.
+        """
+        import h5py
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".partial")
+        try:
+            with h5py.File(tmp, "w") as h5:
+                a = h5.attrs
+                a["kind"] = "branch"
+                a["schema_version"] = BRANCH_SCHEMA
+                a["param"] = self.param
+                a["period"] = int(self.period)
+                a["status"] = self.status
+                a["system"] = json.dumps(self.system.to_dict())
+                h5["values"] = self.values
+                h5["points"] = self.points
+                h5["T"] = self.T
+                h5["multipliers_real"] = self.multipliers.real
+                h5["multipliers_imag"] = self.multipliers.imag
+                h5["stable"] = self.stable.astype("i1")
+                h5["bifurcation_kind"] = np.array(
+                    [b.kind for b in self.bifurcations], dtype=h5py.string_dtype()
+                )
+                h5["bifurcation_value"] = np.array([b.value for b in self.bifurcations], "f8")
+                h5["bifurcation_index"] = np.array([b.index for b in self.bifurcations], "i8")
+            tmp.replace(path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        return path
+
+
+# ------------------------------------------------------------------ the core
+def _tangent(DG: np.ndarray, prev: np.ndarray) -> np.ndarray:
+    """Unit null vector of DG (m x (m+1)), oriented along ``prev``."""
+    m = DG.shape[0]
+    A = np.vstack([DG, prev[None, :]])
+    rhs = np.zeros(m + 1)
+    rhs[-1] = 1.0
+    t = np.linalg.solve(A, rhs)
+    return t / np.linalg.norm(t)
+
+
+def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
+    """Newton on [G(x); normal . (x - anchor)] = 0 from x_pred."""
+    x = x_pred.copy()
+    for it in range(max_iter + 1):
+        ok, G, DG, A = evaluate(x)
+        if not ok:
+            return False, x, None, it
+        res = float(np.max(np.abs(G)))
+        h = float(normal @ (x - anchor))
+        if res <= tol and abs(h) <= tol:
+            return True, x, (G, DG, A), it
+        if it == max_iter:
+            break
+        J = np.vstack([DG, normal[None, :]])
+        try:
+            dx = np.linalg.solve(J, -np.r_[G, h])
+        except np.linalg.LinAlgError:
+            return False, x, None, it
+        x = x + dx
+        if not np.all(np.isfinite(x)):
+            return False, x, None, it
+    return False, x, None, max_iter
+
+
+def _tests(A: np.ndarray, t: np.ndarray) -> dict[str, float]:
+    """Test functions whose sign changes mark the bifurcations."""
+    mu = np.linalg.eigvals(A)
+    cplx = mu[np.abs(mu.imag) > 1e-12 * np.maximum(1.0, np.abs(mu))]
+    ns = math.nan  # |mu| - 1 of the complex pair nearest the unit circle
+    if cplx.size:
+        ns = float((np.abs(cplx) - 1.0)[np.argmin(np.abs(np.abs(cplx) - 1.0))])
+    return {
+        "fold": float(t[-1]),  # d lambda / ds
+        "period-doubling": float(np.linalg.det(A + np.eye(A.shape[0]))),  # prod (mu + 1)
+        "neimark-sacker": ns,
+    }
+
+
+def pseudo_arclength(
+    evaluate: Evaluator,
+    x0: np.ndarray,
+    direction: float,
+    bounds: tuple[float, float],
+    *,
+    ds: float,
+    ds_min: float,
+    ds_max: float,
+    max_points: int,
+    tol: float,
+    locate_tol: float = 1e-9,
+    max_corrector: int = 6,
+    jump: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+):
+    """Follow G(x) = 0, x = (z, lambda), by pseudo-arclength continuation.
+
+    Parameters
+    ----------
+    evaluate : callable
+        x -> (ok, G, DG, A): the residual, its Jacobian (m x (m + 1)) and the
+        map's Jacobian in z (m x m; its eigenvalues are the multipliers).
+    x0 : ndarray, shape (m + 1,)
+        A solution (G(x0) ~ 0).
+    direction : float
+        +1 to start towards increasing lambda, -1 towards decreasing.
+    bounds : (float, float)
+        The branch ends when lambda leaves [lo, hi].
+    ds, ds_min, ds_max : float
+        First, smallest and largest arclength step. The step grows by 1.5
+        after a corrector that needed <= 3 iterations, halves after a failure.
+    max_points : int
+    tol : float
+        Corrector tolerance on max |G|.
+    locate_tol : float
+        Bifurcations are located (Illinois secant on the test function along
+        the chord between two branch points) until lambda moves less than this.
+    max_corrector : int
+        Most corrector iterations per step.
+    jump : callable, optional
+        (x_old, x_new) -> True when x_new is not on the same smooth branch
+        (for orbits: the period in time jumped). Such a step, like a failed
+        corrector or one that moved more than ds / 2 from the predictor, is
+        rejected and ds halved. When ds falls below ds_min and the last
+        rejection was a jump, the branch ends with status "nonsmooth" within
+        ds_min of the discontinuity; otherwise with "step-too-small".
+
+    Returns
+    -------
+    xs, mults, bifs, status
+        The points (k, m + 1), their multipliers (k, m), the located
+        bifurcations (kind, lambda, index, x) and the reason the branch ended:
+        "bounds", "max-points", "step-too-small" (the corrector failed) or
+        "nonsmooth" (steps kept jumping off the branch).
+    """
+    ok, G, DG, A = evaluate(x0)
+    if not ok:
+        raise ValueError("the start could not be evaluated")
+    m = G.size
+    guess = np.zeros(m + 1)
+    guess[-1] = 1.0 if direction >= 0 else -1.0
+    t = _tangent(DG, guess)
+    xs = [x0.copy()]
+    mults = [_sorted_eigs(A)]
+    tests = [_tests(A, t)]
+    bifs: list[tuple[str, float, int, np.ndarray]] = []
+    lo, hi = bounds
+    status = "max-points"
+    while len(xs) < max_points:
+        x = xs[-1]
+        accepted = False
+        jumped = False
+        while ds >= ds_min:
+            x_pred = x + ds * t
+            okc, x_new, data, its = _correct(evaluate, x_pred, t, x_pred, tol, max_corrector)
+            jumped = False
+            if okc:
+                jumped = bool(jump is not None and jump(x, x_new))
+                # a corrector that went far from the predictor has left the branch
+                if not jumped and np.linalg.norm(x_new - x_pred) <= 0.5 * ds:
+                    accepted = True
+                    break
+            ds *= 0.5
+        if not accepted:
+            status = "nonsmooth" if jumped else "step-too-small"
+            break
+        G, DG, A = data
+        t_new = _tangent(DG, t)
+        te = _tests(A, t_new)
+        k = len(xs) - 1
+        for kind, prev in tests[-1].items():
+            cur = te[kind]
+            if math.isfinite(prev) and math.isfinite(cur) and prev * cur < 0:
+                loc = _locate(evaluate, x, x_new, kind, prev, cur, t, tol, locate_tol)
+                if loc is not None:
+                    bifs.append((kind, float(loc[-1]), k, loc))
+        xs.append(x_new)
+        mults.append(_sorted_eigs(A))
+        tests.append(te)
+        t = t_new
+        if not lo <= x_new[-1] <= hi:
+            status = "bounds"
+            break
+        if its <= 3:
+            ds = min(ds * 1.5, ds_max)
+    return np.array(xs), np.array(mults), bifs, status
+
+
+def _sorted_eigs(A):
+    ev = np.linalg.eigvals(A).astype(complex)
+    return ev[np.argsort(-np.abs(ev), kind="stable")]
+
+
+def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol):
+    """Illinois secant in sigma in [0, 1] on the chord xa -> xb, correcting each point."""
+    chord = xb - xa
+    normal = chord / np.linalg.norm(chord)
+    a, b = 0.0, 1.0
+    side = 0
+    x_best = None
+    lam_prev = math.inf
+    for _ in range(60):
+        sig = (a * fb - b * fa) / (fb - fa)
+        if not a < sig < b:
+            sig = 0.5 * (a + b)
+        anchor = xa + sig * chord
+        okc, x, data, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
+        if not okc:
+            return x_best
+        _, DG, A = data
+        f = _tests(A, _tangent(DG, t_a))[kind]
+        x_best = x
+        if abs(x[-1] - lam_prev) <= locate_tol or f == 0.0 or b - a < 1e-14:
+            return x
+        lam_prev = x[-1]
+        if f * fa > 0:
+            a, fa = sig, f
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b, fb = sig, f
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return x_best
+
+
+# ------------------------------------------------------------------ orbits
+def continue_orbit(
+    orbit: Orbit,
+    param: str,
+    bounds: tuple[float, float],
+    *,
+    ds: float = 0.01,
+    ds_min: float = 1e-8,
+    ds_max: float = 0.05,
+    max_points: int = 200,
+    direction: float = 1.0,
+    tol: float = 1e-10,
+    rtol: float = 1e-11,
+    atol: float = 1e-13,
+    fd_step: float = 1e-7,
+) -> Branch:
+    """Continue a periodic orbit in one parameter (pseudo-arclength).
+
+    Parameters
+    ----------
+    orbit : Orbit
+        A converged orbit from :func:`find_orbit`.
+    param : str
+        A :class:`System` field (one of ``SWEEPABLE``), e.g. "eta".
+    bounds : (float, float)
+        The parameter interval; it must contain the orbit's value.
+    ds, ds_min, ds_max : float
+        First, smallest and largest step in arclength (section coordinates and
+        the parameter together).
+    max_points : int
+        Most branch points.
+    direction : float
+        +1: start towards increasing ``param``; -1: decreasing.
+    tol : float
+        Corrector tolerance on max |P^p(z) - z|.
+    rtol, atol : float
+        Integration tolerances of the return map.
+    fd_step : float
+        Relative step of the central difference dP/dlambda (the variational
+        equations give the Jacobian in z only).
+
+    Returns
+    -------
+    Branch
+
+    Raises
+    ------
+    ValueError
+        For an unconverged orbit, an unknown ``param``, bounds that do not
+        contain the start, or non-positive step sizes (naming the argument).
+    """
+    if not isinstance(orbit, Orbit) or not orbit.converged:
+        raise ValueError("orbit must be a converged Orbit from find_orbit")
+    if param not in SWEEPABLE or param == "n_oscillators":
+        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
+    try:
+        lo, hi = (float(v) for v in bounds)
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds must be two numbers (lo, hi), got {bounds!r}") from None
+    lam0 = float(getattr(orbit.system, param))
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= lam0 <= hi):
+        raise ValueError(f"bounds {bounds!r} must contain the orbit's {param} = {lam0}")
+    for name, v in (("ds", ds), ("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+    if not ds_min <= ds <= ds_max:
+        raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
+    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
+        raise ValueError(f"max_points must be an integer >= 2, got {max_points!r}")
+    system0 = orbit.system
+    p = orbit.period
+    n = system0.n_state
+    mask = np.arange(n) != SECTION_INDEX
+    kw = dict(rtol=rtol, atol=atol)
+
+    def full(x):
+        z = np.zeros(n)
+        z[mask] = x[:-1]
+        return z
+
+    def system_at(lam):
+        return dataclasses.replace(system0, **{param: float(lam)})
+
+    cache: dict[bytes, Any] = {}
+    periods: dict[bytes, float] = {}
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key in cache:
+            return cache[key]
+        lam = float(x[-1])
+        try:
+            s = system_at(lam)
+        except ValueError:  # outside the parameter's valid range
+            return False, None, None, None
+        z = full(x)
+        st, pts, times, jac = return_map(s, z, p, **kw)
+        if st != "ok":
+            return False, None, None, None
+        h = fd_step * max(1.0, abs(lam))
+        try:
+            s_p, s_m = system_at(lam + h), system_at(lam - h)
+        except ValueError:
+            return False, None, None, None
+        st_p, pp, _, _ = return_map(s_p, z, p, tangents=False, **kw)
+        st_m, pm, _, _ = return_map(s_m, z, p, tangents=False, **kw)
+        if st_p != "ok" or st_m != "ok":
+            return False, None, None, None
+        G = pts[-1][mask] - x[:-1]
+        dlam = (pp[-1][mask] - pm[-1][mask]) / (2 * h)
+        DG = np.hstack([jac - np.eye(n - 1), dlam[:, None]])
+        out = (True, G, DG, jac)
+        periods[key] = float(times[-1])
+        cache.clear()
+        cache[key] = out
+        return out
+
+    def jump(x_old, x_new):
+        t_old = periods.get(x_old.tobytes(), math.nan)
+        t_new = periods.get(x_new.tobytes(), math.nan)
+        if not abs(t_new - t_old) <= 0.05 * t_old:
+            return True
+        # a rest point is a fixed point of the map too (near a stable focus): not the branch
+        f = _field(system_at(x_new[-1]), full(x_new))
+        return bool(np.max(np.abs(f)) < EQUILIBRIUM_SPEED)
+
+    x0 = np.r_[orbit.points[0][mask], lam0]
+    evaluate(x0)
+    xs, mults, bifs, status = pseudo_arclength(
+        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
+        max_points=max_points, tol=tol, jump=jump,
+    )  # fmt: skip
+    if status == "nonsmooth":
+        # the fixed point of P^p ends: its return time jumps (a crossing of the section
+        # appears or vanishes: the orbit grazes dx1 = 0), within ds_min of the last point
+        bifs.append(("section-grazing", float(xs[-1][-1]), len(xs) - 1, xs[-1].copy()))
+    points = np.array([full(x) for x in xs])
+    T = np.empty(len(xs))
+    for i, x in enumerate(xs):
+        T[i] = periods.get(x.tobytes(), math.nan)
+        if not math.isfinite(T[i]):
+            _, _, times, _ = return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)
+            T[i] = times[-1]
+    return Branch(
+        system=system0,
+        param=param,
+        period=p,
+        values=xs[:, -1].copy(),
+        points=points,
+        T=T,
+        multipliers=mults,
+        stable=np.all(np.abs(mults) < 1.0, axis=1),
+        bifurcations=[Bifurcation(k, v, i, full(x)) for k, v, i, x in bifs],
+        status=status,
+    )
