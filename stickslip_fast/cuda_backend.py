@@ -64,6 +64,7 @@ from numba import cuda, float64, int64, njit
 from . import linalg, model, poincare
 from .params import P_ETA, P_ETAP, P_VB0, eta_prime
 from .status import STATUS_NAMES
+from .steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
 from .tableaus import RODAS5P
 
 __all__ = [
@@ -106,12 +107,12 @@ _Q = RODAS5P.embedded_order + 1.0
 _STAGES = int(_B.size)
 _NDENSE = int(_H.shape[0])
 
-# PI step-size controller: the CPU kernel's constants (integrators.py).
-_SAFETY = 0.9
-_FAC_MIN = 0.2
-_FAC_MAX = 6.0
-_PI_ALPHA = 0.7
-_PI_BETA = 0.4
+# PI step-size controller: the CPU kernel's constants
+_SAFETY = STEP_SAFETY
+_FAC_MIN = STEP_FAC_MIN
+_FAC_MAX = STEP_FAC_MAX
+_PI_ALPHA = PI_ALPHA
+_PI_BETA = PI_BETA
 
 
 def simulator_enabled() -> bool:
@@ -414,7 +415,7 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
                 jcorner = jacobian_blocks(y, p, N_OSC, DC, jb, jcol, jrow)
                 jac_fresh = True
 
-            # ---- one Rosenbrock step (transformed form), as integrators.rosenbrock_step
+            # ---- one Rosenbrock step (transformed form), as steppers.rosenbrock_step
             ok = True
             schur = w_factor(1.0 / (h * _GAMMA), jb, jcol, jrow, jcorner, N_OSC, DC, lu, piv, z)
             if not math.isfinite(schur):

@@ -71,7 +71,6 @@ __all__ = [
     "observe_step",
     "stop_now",
     "locate_crossing",
-    "alloc_poincare_observer",
 ]
 
 _JIT = JIT
@@ -214,16 +213,6 @@ def _converged_now(stop, obs, t, y) -> bool:
                 obs.ymin[i] = y[i]
                 obs.ymax[i] = y[i]
     return False
-
-
-@njit(**_JIT)
-def alloc_poincare_observer(section, t_transient, max_points, n_samples, sample_dt, n):
-    """A :class:`PoincareObserver` with fresh buffers (for single runs)."""
-    return PoincareObserver(
-        section, t_transient, np.empty((max_points, n)), np.empty(max_points),
-        np.empty((n_samples, n)), sample_dt, np.empty(n), np.empty(n),
-        np.zeros(2, dtype=np.int64),
-    )  # fmt: skip
 
 
 # ------------------------------------------------------------------ section

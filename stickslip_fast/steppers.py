@@ -6,7 +6,7 @@ A *problem* is a record of :mod:`stickslip_fast.problems` (or
 :mod:`stickslip_fast.testproblems`): the steppers call only ``problem_f``,
 ``problem_jac``, ``problem_factor`` and ``problem_solve`` on it, which Numba
 dispatches on the record's type. A :class:`StepWorkspace` holds every array a
-step needs; the caller allocates it once (:func:`alloc_step_workspace`), and
+step needs; the caller allocates it once (``alloc_workspace``), and
 no step allocates.
 
 The generic functions (overloaded per method record):
