@@ -11,6 +11,7 @@ import argparse
 import json
 import os
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -82,7 +83,6 @@ def _add_common(p: argparse.ArgumentParser) -> None:
 
 def _check_writable(path: str, what: str) -> None:
     """Fail now, with one line naming the path, if ``path`` cannot be written later."""
-    from pathlib import Path
 
     from .io import _make_parent
 
@@ -482,14 +482,15 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:
         # the compiled work stops within about a second (interrupt.call_interruptible)
-        resumable = args.command in ("sweep", "census")
-        print(
-            "stickslip-fast: interrupted; finished chunks are in the file, "
-            "run the same command again to resume"
-            if resumable
-            else "stickslip-fast: interrupted",
-            file=sys.stderr,
-        )
+        out = getattr(args, "output", None)
+        if args.command in ("sweep", "census") and out is not None and Path(out).exists():
+            msg = (
+                f"stickslip-fast: interrupted; finished chunks are in {out}, "
+                "run the same command again to resume"
+            )
+        else:  # nothing was written yet (or there is nothing to resume)
+            msg = "stickslip-fast: interrupted"
+        print(msg, file=sys.stderr)
         return 130
 
 
