@@ -23,7 +23,13 @@ from .settings import STOP_KINDS, Settings
 from .simulate import MAX_PERIOD
 from .status import ST_NOT_COMPUTED
 from .system import PARAM_INDEX, System
-from .trajectory import METHODS, SWEEP_INT_FIELDS, continuation_chunk, sweep_chunk
+from .trajectory import (
+    METHODS,
+    SWEEP_INT_FIELDS,
+    continuation_chunk,
+    run_settings,
+    sweep_chunk,
+)
 
 __all__ = [
     "WorkUnit",
@@ -48,11 +54,12 @@ def _param_rows(system: System, names: Sequence[str], values: np.ndarray) -> np.
 
 
 def _kernel_args(system: System, s: Settings) -> tuple:
-    return (
-        system.n_oscillators, system.is_dc_motor, s.t_end, s.t_transient, s.rtol, s.atol, s.h,
-        s.max_steps, s.equilibrium_tol, s.period_tol, MAX_PERIOD, s.max_points,
-        STOP_KINDS.index(s.stop), s.dwell,
+    """(n_osc, dc, run settings, max_points): the kernels' arguments after the parameters."""
+    rs = run_settings(
+        s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
+        s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
     )  # fmt: skip
+    return system.n_oscillators, system.is_dc_motor, rs, s.max_points
 
 
 def _checked(res: tuple) -> tuple:

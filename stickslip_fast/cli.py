@@ -375,9 +375,13 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 2
     except KeyboardInterrupt:
+        # the compiled work stops within about a second (interrupt.call_interruptible)
+        resumable = args.command in ("sweep", "census")
         print(
             "stickslip-fast: interrupted; finished chunks are in the file, "
-            "run the same command again to resume",
+            "run the same command again to resume"
+            if resumable
+            else "stickslip-fast: interrupted",
             file=sys.stderr,
         )
         return 130

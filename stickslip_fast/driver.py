@@ -32,9 +32,10 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
+from numba import njit
 from numba.extending import overload
 
+from .jit import JIT, OVERLOAD, is_record
 from .poincare import ring_period
 from .problems import problem_error_norm, problem_initial_step
 from .status import (
@@ -73,8 +74,8 @@ __all__ = [
     "alloc_poincare_observer",
 ]
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-_OVL = dict(jit_options=_JIT)
+_JIT = JIT
+_OVL = OVERLOAD
 
 OBS_MODIFIED = 1
 OBS_FAIL = 2
@@ -118,8 +119,7 @@ STATE_SIZE = 6
 C_CROSS, C_SAMPLES = 0, 1
 
 
-def _is(typ, cls) -> bool:
-    return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is cls
+_is = is_record
 
 
 @njit(**_JIT)

@@ -11,18 +11,20 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-# error_model="numpy": a division by zero gives inf/nan (caught by the callers'
-# finiteness checks) instead of raising inside compiled, possibly parallel, code.
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+from .jit import JIT as _JIT
 
 
-@njit(**_JIT)
-def _lu4(a: np.ndarray, piv: np.ndarray) -> bool:
-    """In-place LU of a 4x4 block with partial pivoting. False if singular."""
-    for k in range(4):
+@njit(inline="always", **_JIT)
+def lu_inplace(a: np.ndarray, piv: np.ndarray, n: int) -> bool:
+    """In-place LU of the n x n matrix ``a`` with partial pivoting. False if singular.
+
+    Inlined, so that a literal ``n`` (4 for the model's blocks) becomes a
+    compile-time loop bound.
+    """
+    for k in range(n):
         p = k
         big = abs(a[k, k])
-        for r in range(k + 1, 4):
+        for r in range(k + 1, n):
             if abs(a[r, k]) > big:
                 big = abs(a[r, k])
                 p = r
@@ -30,37 +32,37 @@ def _lu4(a: np.ndarray, piv: np.ndarray) -> bool:
         if big == 0.0:
             return False
         if p != k:
-            for q in range(4):
+            for q in range(n):
                 tmp = a[k, q]
                 a[k, q] = a[p, q]
                 a[p, q] = tmp
         inv = 1.0 / a[k, k]
-        for r in range(k + 1, 4):
+        for r in range(k + 1, n):
             a[r, k] *= inv
             f = a[r, k]
             if f != 0.0:
-                for q in range(k + 1, 4):
+                for q in range(k + 1, n):
                     a[r, q] -= f * a[k, q]
     return True
 
 
-@njit(**_JIT)
-def _lu4_solve(a: np.ndarray, piv: np.ndarray, b: np.ndarray, off: int) -> None:
-    """Solve in place for the 4 entries b[off:off+4] with an _lu4 factor."""
-    for k in range(4):
+@njit(inline="always", **_JIT)
+def lu_solve(a: np.ndarray, piv: np.ndarray, b: np.ndarray, off: int, n: int) -> None:
+    """Solve in place for the n entries b[off:off+n] with a :func:`lu_inplace` factor."""
+    for k in range(n):
         p = piv[k]
         if p != k:
             tmp = b[off + k]
             b[off + k] = b[off + p]
             b[off + p] = tmp
-    for k in range(4):
+    for k in range(n):
         s = b[off + k]
         for q in range(k):
             s -= a[k, q] * b[off + q]
         b[off + k] = s
-    for k in range(3, -1, -1):
+    for k in range(n - 1, -1, -1):
         s = b[off + k]
-        for q in range(k + 1, 4):
+        for q in range(k + 1, n):
             s -= a[k, q] * b[off + q]
         b[off + k] = s / a[k, k]
 
@@ -90,7 +92,7 @@ def w_factor(
             for q in range(4):
                 a[r, q] = -blocks[i, r, q]
             a[r, r] += sigma
-        if not _lu4(a, piv[i]):
+        if not lu_inplace(a, piv[i], 4):
             return np.nan
     if not dc:
         return 1.0
@@ -99,7 +101,7 @@ def w_factor(
         zi = z[i]
         for r in range(4):
             zi[r] = -border_col[i, r]
-        _lu4_solve(lu[i], piv[i], zi, 0)
+        lu_solve(lu[i], piv[i], zi, 0, 4)
         for r in range(4):
             # W's border row is -border_row
             schur += border_row[i, r] * zi[r]
@@ -121,7 +123,7 @@ def w_solve(
 ) -> None:
     """Solve W x = b in place with the factors from :func:`w_factor`."""
     for i in range(n_osc):
-        _lu4_solve(lu[i], piv[i], b, 4 * i)
+        lu_solve(lu[i], piv[i], b, 4 * i, 4)
     if dc:
         n = 4 * n_osc
         s = b[n]
@@ -168,7 +170,7 @@ def bordered_matvec(
 # ------------------------------------------------------------- dense (test problems)
 @njit(**_JIT)
 def dense_w_factor(sigma: float, jac: np.ndarray, lu: np.ndarray, piv: np.ndarray) -> bool:
-    """Factor W = sigma I - J (dense, n x n) in place into ``lu``; False if singular.
+    """Factor W = sigma I - J (dense, n x n) into ``lu``; False if singular.
 
     For small test problems (:mod:`stickslip_fast.testproblems`); the model uses
     the bordered O(N) factorisation above.
@@ -178,47 +180,10 @@ def dense_w_factor(sigma: float, jac: np.ndarray, lu: np.ndarray, piv: np.ndarra
         for q in range(n):
             lu[r, q] = -jac[r, q]
         lu[r, r] += sigma
-    for k in range(n):
-        p = k
-        big = abs(lu[k, k])
-        for r in range(k + 1, n):
-            if abs(lu[r, k]) > big:
-                big = abs(lu[r, k])
-                p = r
-        piv[k] = p
-        if not big > 0.0:
-            return False
-        if p != k:
-            for q in range(n):
-                tmp = lu[k, q]
-                lu[k, q] = lu[p, q]
-                lu[p, q] = tmp
-        inv = 1.0 / lu[k, k]
-        for r in range(k + 1, n):
-            lu[r, k] *= inv
-            f = lu[r, k]
-            for q in range(k + 1, n):
-                lu[r, q] -= f * lu[k, q]
-    return True
+    return lu_inplace(lu, piv, n)
 
 
 @njit(**_JIT)
 def dense_w_solve(lu: np.ndarray, piv: np.ndarray, b: np.ndarray) -> None:
     """Solve W x = b in place with the factors from :func:`dense_w_factor`."""
-    n = lu.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-    for k in range(n):
-        s = b[k]
-        for q in range(k):
-            s -= lu[k, q] * b[q]
-        b[k] = s
-    for k in range(n - 1, -1, -1):
-        s = b[k]
-        for q in range(k + 1, n):
-            s -= lu[k, q] * b[q]
-        b[k] = s / lu[k, k]
+    lu_solve(lu, piv, b, 0, lu.shape[0])

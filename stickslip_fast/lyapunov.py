@@ -25,7 +25,7 @@ from collections import namedtuple
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit, types
+from numba import njit
 from numba.extending import overload
 
 from .driver import (
@@ -41,6 +41,7 @@ from .driver import (
     stop_now,
 )
 from .interrupt import call_interruptible, new_abort_flag
+from .jit import JIT, OVERLOAD, is_record
 from .params import N_PARAMS
 from .problems import alloc_bordered_linear, make_tangent
 from .status import STATUS_NAMES
@@ -49,8 +50,8 @@ from .system import System
 
 __all__ = ["LyapunovResult", "LyapunovObserver", "largest_lyapunov", "lyapunov_kernel"]
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-_OVL = dict(jit_options=_JIT)
+_JIT = JIT
+_OVL = OVERLOAD
 
 # renormalise early (without recording) when |u| leaves [1/_BIG, _BIG]
 _BIG = 1e100
@@ -67,8 +68,7 @@ LyapunovObserver = namedtuple(
 )
 
 
-def _is(typ, cls) -> bool:
-    return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is cls
+_is = is_record
 
 
 @njit(**_JIT)

@@ -24,6 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .jit import JIT
 from .linalg import bordered_matvec
 from .params import (
     P_BETA,
@@ -55,7 +56,7 @@ __all__ = [
 
 # error_model="numpy": a division by zero gives inf/nan instead of raising, so no
 # parameter value can make compiled (possibly parallel) code raise.
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_JIT = JIT
 
 
 @njit(**_JIT)

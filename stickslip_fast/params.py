@@ -3,7 +3,7 @@
 The compiled kernels get a :class:`~stickslip_fast.system.System` packed into a
 float64 array (:meth:`System.to_array`); these are its slots. Slot ``P_ETAP``
 (eta') is derived from eta by :func:`eta_prime`, never set by hand. This module
-imports nothing from the package, so system.py and model.py can both use it.
+imports nothing else from the package, so system.py and model.py can both use it.
 """
 
 from __future__ import annotations
@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from .jit import JIT
 
 __all__ = ["ETA_MIN", "ETA_MAX", "N_PARAMS", "PARAM_INDEX", "eta_prime"]
 
@@ -36,7 +38,7 @@ PARAM_INDEX: dict[str, int] = {
 }
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(**JIT)
 def eta_prime(eta: float) -> float:
     """The paper's cubic fit eta'(eta) on [1, 1.3], [1.3, 2.7], [2.7, 10].
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .jit import JIT as _JIT
 from .status import (  # noqa: F401  (re-exported: the codes used to live here)
     ORBIT_STATUSES,
     ST_EQUILIBRIUM,
@@ -25,8 +26,6 @@ from .status import (  # noqa: F401  (re-exported: the codes used to live here)
     ST_UNDERFLOW,
     STATUS_NAMES,
 )
-
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 #: A DC-motor equilibrium counts as "stalled" when the belt runs slower than
 #: this fraction of its no-load speed v_b0.
@@ -44,27 +43,38 @@ def detect_period(points: np.ndarray, count: int, tol: float, max_period: int) -
     """
     if count < 2:
         return 0
-    n = points.shape[1]
-    scale = 0.0
-    for j in range(count):
-        for i in range(n):
-            v = abs(points[j, i])
-            if v > scale:
-                scale = v
-    thr = tol * (1.0 + scale)
-    pmax = min(max_period, count // 2)
-    for per in range(1, pmax + 1):
-        good = True
-        for j in range(count - per, count):
-            for i in range(n):
-                if abs(points[j, i] - points[j - per, i]) > thr:
-                    good = False
-                    break
-            if not good:
-                break
-        if good:
+    thr = tol * (1.0 + _max_abs(points, 0, count))
+    for per in range(1, min(max_period, count // 2) + 1):
+        if _repeats(points, count - per, count, per, thr):
             return per
     return 0
+
+
+@njit(**_JIT)
+def _max_abs(pts: np.ndarray, first: int, last: int) -> float:
+    """Largest |coordinate| of points first..last-1 (point j in row j % rows: a ring)."""
+    cap = pts.shape[0]
+    scale = 0.0
+    for j in range(first, last):
+        row = pts[j % cap]
+        for i in range(pts.shape[1]):
+            v = abs(row[i])
+            if v > scale:
+                scale = v
+    return scale
+
+
+@njit(**_JIT)
+def _repeats(pts: np.ndarray, first: int, last: int, per: int, thr: float) -> bool:
+    """Whether each point first..last-1 lies within thr (max norm) of the point per before it."""
+    cap = pts.shape[0]
+    for j in range(first, last):
+        a = pts[j % cap]
+        b = pts[(j - per) % cap]
+        for i in range(pts.shape[1]):
+            if not abs(a[i] - b[i]) <= thr:
+                return False
+    return True
 
 
 @njit(**_JIT)
@@ -129,31 +139,12 @@ def ring_period(
     p before it, so the m + p most recent points must be in the buffer. Returns
     0 if no such p exists. Used by converged stopping.
     """
-    cap = pts.shape[0]
-    avail = min(count, cap)
-    n = pts.shape[1]
+    avail = min(count, pts.shape[0])
     for per in range(1, max_period + 1):
         m = max(min_points, min_repeats * per)
         if m + per > avail:
             break
-        scale = 0.0
-        for j in range(count - m - per, count):
-            row = pts[j % cap]
-            for i in range(n):
-                v = abs(row[i])
-                if v > scale:
-                    scale = v
-        thr = tol * (1.0 + scale)
-        good = True
-        for j in range(count - m, count):
-            a = pts[j % cap]
-            b = pts[(j - per) % cap]
-            for i in range(n):
-                if not abs(a[i] - b[i]) <= thr:
-                    good = False
-                    break
-            if not good:
-                break
-        if good:
+        thr = tol * (1.0 + _max_abs(pts, count - m - per, count))
+        if _repeats(pts, count - m, count, per, thr):
             return per
     return 0

@@ -46,9 +46,10 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
+from numba import njit
 from numba.extending import overload
 
+from .jit import JIT, OVERLOAD, is_record
 from .linalg import bordered_matvec, w_factor, w_solve
 from .model import jacobian_blocks, rhs, second_derivative_form
 from .params import P_ETA, P_ETAP, eta_prime
@@ -70,8 +71,8 @@ __all__ = [
     "initial_step",
 ]
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-_OVL = dict(jit_options=_JIT)
+_JIT = JIT
+_OVL = OVERLOAD
 
 #: The model. ``p`` is the packed parameter array with eta' filled in.
 StickSlip = namedtuple("StickSlip", ["p", "n_osc", "dc"])
@@ -89,8 +90,7 @@ BorderedLinear = namedtuple(
 )
 
 
-def _is(typ, cls) -> bool:
-    return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is cls
+_is = is_record
 
 
 @njit(**_JIT)

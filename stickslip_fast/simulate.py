@@ -33,6 +33,7 @@ from .trajectory import (
     N_STAT_F,
     N_STAT_I,
     integrate,
+    run_settings,
     unroll_ring,
 )
 
@@ -223,12 +224,14 @@ def simulate(
     stat_i = np.zeros(N_STAT_I, dtype=np.int64)
     stat_f = np.zeros(N_STAT_F)
     y_end = np.empty(n)
+    rs = run_settings(
+        s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
+        s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
+    )  # fmt: skip
     code = call_interruptible(
         integrate, METHODS.index(s.method), y_init, system.to_array(), system.n_oscillators,
-        system.is_dc_motor, s.t_end, s.t_transient, s.rtol, s.atol, s.h,
-        s.max_steps, s.equilibrium_tol, ring, tring, samples,
-        1.0 if sample_dt is None else sample_dt, y_end, stat_i, stat_f,
-        STOP_KINDS.index(s.stop), s.dwell, s.period_tol, MAX_PERIOD, abort=new_abort_flag(),
+        system.is_dc_motor, rs, ring, tring, samples, 1.0 if sample_dt is None else sample_dt,
+        y_end, stat_i, stat_f, abort=new_abort_flag(),
     )  # fmt: skip
     status = STATUS_NAMES[code]
     n_cross = int(stat_i[I_CROSSINGS])

@@ -33,9 +33,10 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
+from numba import njit
 from numba.extending import overload
 
+from .jit import JIT, OVERLOAD, is_record
 from .problems import (
     error_norm,
     initial_step,
@@ -70,20 +71,23 @@ __all__ = [
 DENSE_POLY = 0
 DENSE_HERMITE = 1
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-_OVL = dict(jit_options=_JIT)
+_JIT = JIT
+_OVL = OVERLOAD
 
 #: A Rosenbrock-Wanner method in transformed form; ``q`` is the order of the
 #: error estimate plus one (the exponent of the step-size controller).
 RosenbrockMethod = namedtuple("RosenbrockMethod", ["gamma", "a", "C", "b", "b_err", "H", "q"])
-#: An explicit Runge-Kutta method with FSAL and a polynomial continuous extension ``P``.
+#: An explicit Runge-Kutta method with FSAL and a polynomial continuous extension:
+#: ``P`` (dense rows, stages) is the transpose of the tableau's ``dense``.
 ExplicitRKMethod = namedtuple("ExplicitRKMethod", ["A", "b", "b_err", "P", "q"])
 
 RODAS5P_METHOD = RosenbrockMethod(
     float(RODAS5P.gamma), RODAS5P.a, RODAS5P.C, RODAS5P.b, RODAS5P.b_err, RODAS5P.H,
     RODAS5P.embedded_order + 1.0,
 )  # fmt: skip
-DOPRI5_METHOD = ExplicitRKMethod(DOPRI5.A, DOPRI5.b, DOPRI5.b_err, DOPRI5.dense, 5.0)
+DOPRI5_METHOD = ExplicitRKMethod(
+    DOPRI5.A, DOPRI5.b, DOPRI5.b_err, np.ascontiguousarray(DOPRI5.dense.T), 5.0
+)
 
 #: Everything one step needs. ``K`` (stages, n), ``D`` (dense rows, n), the
 #: rest (n,) but ``flags`` (int64[1]: 1 while the Jacobian is fresh at y).
@@ -92,8 +96,7 @@ StepWorkspace = namedtuple(
 )
 
 
-def _is(typ, cls) -> bool:
-    return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is cls
+_is = is_record
 
 
 @njit(**_JIT)
@@ -113,7 +116,7 @@ def _alloc_workspace(method, n):
     if _is(method, RosenbrockMethod):
         return lambda method, n: _alloc(method.b.size, method.H.shape[0], n)
     if _is(method, ExplicitRKMethod):
-        return lambda method, n: _alloc(method.b.size, method.P.shape[1], n)
+        return lambda method, n: _alloc(method.b.size, method.P.shape[0], n)
 
 
 # ------------------------------------------------------------------ step control
@@ -258,38 +261,24 @@ def _accept(method, prob, lin, y, ws, modified):
         return impl
 
 
+@njit(**_JIT)
+def _stage_combination(M, K, scale, D) -> None:
+    """D = scale * M K: dense-output coefficients from the stages (M is rows x stages)."""
+    s = M.shape[1]
+    for r in range(M.shape[0]):
+        for i in range(K.shape[1]):
+            acc = 0.0
+            for j in range(s):
+                acc += M[r, j] * K[j, i]
+            D[r, i] = scale * acc
+
+
 @overload(stepper_dense, **_OVL)
 def _dense(method, ws, h):
     if _is(method, ExplicitRKMethod):
-
-        def impl(method, ws, h):
-            # D = h P^T K
-            P = method.P
-            K = ws.K
-            s = P.shape[0]
-            for r in range(P.shape[1]):
-                for i in range(K.shape[1]):
-                    acc = 0.0
-                    for j in range(s):
-                        acc += P[j, r] * K[j, i]
-                    ws.D[r, i] = h * acc
-
-        return impl
+        return lambda method, ws, h: _stage_combination(method.P, ws.K, h, ws.D)
     if _is(method, RosenbrockMethod):
-
-        def impl(method, ws, h):
-            # D = H K
-            H = method.H
-            K = ws.K
-            s = H.shape[1]
-            for r in range(H.shape[0]):
-                for i in range(K.shape[1]):
-                    acc = 0.0
-                    for j in range(s):
-                        acc += H[r, j] * K[j, i]
-                    ws.D[r, i] = acc
-
-        return impl
+        return lambda method, ws, h: _stage_combination(method.H, ws.K, 1.0, ws.D)
 
 
 @overload(stepper_dense_kind, **_OVL)

@@ -79,7 +79,7 @@ def _check_axis(system: System, name: str, vals: Any) -> np.ndarray:
 
     Every per-field rule of :class:`System` is an interval (m > 0, eta in
     [1, 10], mu >= 0, ...), so checking the smallest and the largest value
-    checks them all: 1e8 values take a second, not minutes of System() calls.
+    checks them all: 1e7 values take ~0.5 s, not ~5 min of one System() per value.
     """
     if name not in SWEEPABLE:
         raise ValueError(
@@ -438,8 +438,10 @@ def sweep(
         if chunk_size is None:
             chunk_size = getattr(runner, "default_chunk_size", 32 * nthreads)
         _check_sweep_memory(plan, out is None, chunk_size, nthreads)
+        fresh = out is None or not Path(out).exists()
         store = stack.enter_context(_open_store(plan, out, title, notes))
-        done = store.done_mask()
+        # a new store has nothing done: no need to read the mask back (~1.3 s per 1e7 values)
+        done = np.zeros(plan.layout.grid_shape, dtype=bool) if fresh else store.done_mask()
         bar = _progress_bar(stack, progress, done, plan.names)
         units = _units(plan, done, chunk_size, store)
         # closing(): a failure while writing also stops the backend (cancels its tasks)

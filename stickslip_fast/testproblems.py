@@ -27,6 +27,7 @@ from numba import njit, types
 from numba.extending import overload
 
 from .driver import STOP_AT_END, Controls, PoincareObserver, Section, drive, simple_stop
+from .jit import JIT, OVERLOAD
 from .linalg import dense_w_factor, dense_w_solve
 from .problems import (
     error_norm,
@@ -42,8 +43,8 @@ from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, alloc_workspace
 
 __all__ = ["LinearProblem", "Kaps", "ProtheroRobinson", "DenseLinear", "solve_test_problem"]
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
-_OVL = dict(jit_options=_JIT)
+_JIT = JIT
+_OVL = OVERLOAD
 
 LinearProblem = namedtuple("LinearProblem", ["A"])
 Kaps = namedtuple("Kaps", ["eps"])

@@ -32,6 +32,7 @@ from .driver import (
     drive,
     simple_stop,
 )
+from .jit import JIT
 from .params import N_PARAMS, P_VB0
 from .poincare import classify, detect_period, motion_measure
 from .problems import alloc_bordered_linear, make_stickslip
@@ -41,7 +42,7 @@ from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, alloc_workspace
 METHODS = ("rodas5p", "dopri5", "dopri5-fixed")
 M_RODAS5P, M_DOPRI5, M_DOPRI5_FIXED = range(3)
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_JIT = JIT
 _PJIT = dict(parallel=True, cache=True, nogil=True, error_model="numpy")
 
 # slots of the integer and float statistics arrays
@@ -78,6 +79,34 @@ RunSettings = namedtuple(
     ],
 )  # fmt: skip
 STOP_FIXED, STOP_WHEN_CONVERGED = 0, 1
+
+
+def run_settings(
+    t_end: float,
+    t_transient: float,
+    rtol: float,
+    atol: float,
+    h_fixed: float = 0.0,
+    max_steps: int = 20_000_000,
+    equilibrium_tol: float = 1e-4,
+    period_tol: float = 1e-5,
+    max_period: int = 64,
+    stop_kind: int = STOP_FIXED,
+    dwell: float = 200.0,
+) -> RunSettings:
+    """A :class:`RunSettings` with the types the kernels are compiled for.
+
+    ``h_fixed`` > 0 takes fixed steps; ``stop_kind`` is STOP_FIXED or
+    STOP_WHEN_CONVERGED (then ``dwell`` is the time at rest that counts as an
+    equilibrium). Validation is :class:`stickslip_fast.settings.Settings`' job.
+    """
+    return RunSettings(
+        float(t_end), float(t_transient), float(rtol), float(atol), float(h_fixed),
+        int(max_steps), float(equilibrium_tol), float(period_tol), int(max_period),
+        int(stop_kind), float(dwell),
+    )  # fmt: skip
+
+
 #: Converged stopping: points repeat over >= 3 periods and >= 8 points.
 CONVERGED_MIN_REPEATS = 3
 CONVERGED_MIN_POINTS = 8
@@ -136,19 +165,23 @@ def _make_observer(rs, pts, tpts, samples, sample_dt, n):
 
 
 @njit(**_JIT)
+def _run_alone(method, y0, p, n_osc, dc, rs, obs, stop, y, istat, fstat, abort) -> int:
+    """:func:`_run` with buffers of its own."""
+    n = y0.size
+    p_buf = np.empty(N_PARAMS)
+    lin = alloc_bordered_linear(n_osc, n)
+    ws = alloc_workspace(method, n)
+    return _run(method, y0, p, n_osc, dc, rs, p_buf, lin, ws, obs, stop, y, istat, fstat, abort)
+
+
+@njit(**_JIT)
 def integrate(
     method: int,
     y0: np.ndarray,
     p: np.ndarray,
     n_osc: int,
     dc: bool,
-    t_end: float,
-    t_transient: float,
-    rtol: float,
-    atol: float,
-    h_fixed: float,
-    max_steps: int,
-    equilibrium_tol: float,
+    rs: RunSettings,
     pts: np.ndarray,
     tpts: np.ndarray,
     samples: np.ndarray,
@@ -156,74 +189,30 @@ def integrate(
     y_end: np.ndarray,
     stat_i: np.ndarray,
     stat_f: np.ndarray,
-    stop_kind: int = STOP_FIXED,
-    dwell: float = 0.0,
-    period_tol: float = 0.0,
-    max_period: int = 64,
     abort: np.ndarray = NO_ABORT,
 ) -> int:
-    """Integrate one trajectory from t = 0 to ``t_end``; return its status code.
+    """Integrate one trajectory from t = 0 to ``rs.t_end``; return its status code.
 
-    ``p`` is the packed parameter array (eta' is recomputed from eta here).
-    Outputs: ``pts``/``tpts`` (ring buffer of the last Poincare points; see
-    ``stat_i[I_CROSSINGS]`` for the total), ``samples`` (uniform grid from
-    t_transient), ``y_end`` (state at the last accepted time), ``stat_i``
-    (steps, rejected, crossings, samples) and ``stat_f`` (final time, the
-    :func:`motion_measure` of the recording window, time of convergence).
-    ``stop_kind`` STOP_WHEN_CONVERGED ends the run once it has converged (see
-    :func:`driver.converged_stop`; ``dwell``, ``period_tol`` and ``max_period``
-    are its settings). ``abort`` (int64[1]) ends the run with "interrupted"
-    when set from another thread.
+    ``p`` is the packed parameter array (eta' is recomputed from eta here);
+    ``rs`` the settings (:func:`run_settings`). Outputs: ``pts``/``tpts`` (ring
+    buffer of the last Poincare points; see ``stat_i[I_CROSSINGS]`` for the
+    total), ``samples`` (uniform grid from t_transient), ``y_end`` (state at the
+    last accepted time), ``stat_i`` (steps, rejected, crossings, samples) and
+    ``stat_f`` (final time, the :func:`motion_measure` of the recording window,
+    time of convergence). With ``rs.stop_kind`` STOP_WHEN_CONVERGED the run
+    ends once it has converged (see :func:`driver.converged_stop`). ``abort``
+    (int64[1]) ends the run with "interrupted" when set from another thread.
     """
     n = y0.size
-    rs = RunSettings(
-        t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol, period_tol,
-        max_period, stop_kind, dwell,
-    )  # fmt: skip
-    p_buf = np.empty(N_PARAMS)
-    lin = alloc_bordered_linear(n_osc, n)
     obs = _make_observer(rs, pts, tpts, samples, sample_dt, n)
     stop = _stop_rule(rs, n_osc, dc, n)
     istat = np.zeros(2, dtype=np.int64)
     fstat = np.zeros(2)
+    args = (y0, p, n_osc, dc, rs, obs, stop, y_end, istat, fstat, abort)
     if method == M_RODAS5P:
-        ws = alloc_workspace(RODAS5P_METHOD, n)
-        status = _run(
-            RODAS5P_METHOD,
-            y0,
-            p,
-            n_osc,
-            dc,
-            rs,
-            p_buf,
-            lin,
-            ws,
-            obs,
-            stop,
-            y_end,
-            istat,
-            fstat,
-            abort,
-        )
+        status = _run_alone(RODAS5P_METHOD, *args)
     else:
-        ws2 = alloc_workspace(DOPRI5_METHOD, n)
-        status = _run(
-            DOPRI5_METHOD,
-            y0,
-            p,
-            n_osc,
-            dc,
-            rs,
-            p_buf,
-            lin,
-            ws2,
-            obs,
-            stop,
-            y_end,
-            istat,
-            fstat,
-            abort,
-        )
+        status = _run_alone(DOPRI5_METHOD, *args)
     stat_i[I_STEPS] = istat[0]
     stat_i[I_REJECTED] = istat[1]
     stat_i[I_CROSSINGS] = obs.counts[0]
@@ -277,22 +266,9 @@ def _lane_values(
         v = first + k * stride
         y_from = start if chain else y0s[v]
         st = _run(
-            method,
-            y_from,
-            params[v],
-            n_osc,
-            dc,
-            rs,
-            p_buf,
-            lin,
-            ws,
-            obs,
-            stop,
-            y,
-            istat,
-            fstat,
-            abort,
-        )
+            method, y_from, params[v], n_osc, dc, rs, p_buf, lin, ws, obs, stop, y, istat,
+            fstat, abort,
+        )  # fmt: skip
         count_pts = 0
         period = 0
         if st == ST_OK:
@@ -324,16 +300,14 @@ def _lane_dispatch(
     method, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points, points,
     t_points, ints, t_conv, final_state, abort,
 ):  # fmt: skip
+    args = (
+        first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points, points, t_points,
+        ints, t_conv, final_state, abort,
+    )  # fmt: skip
     if method == M_RODAS5P:
-        _lane_values(
-            RODAS5P_METHOD, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points,
-            points, t_points, ints, t_conv, final_state, abort,
-        )  # fmt: skip
+        _lane_values(RODAS5P_METHOD, *args)
     else:
-        _lane_values(
-            DOPRI5_METHOD, first, stride, count, y0s, chain, params, n_osc, dc, rs, max_points,
-            points, t_points, ints, t_conv, final_state, abort,
-        )  # fmt: skip
+        _lane_values(DOPRI5_METHOD, *args)
 
 
 @njit(**_JIT)
@@ -354,18 +328,8 @@ def sweep_chunk(
     params: np.ndarray,
     n_osc: int,
     dc: bool,
-    t_end: float,
-    t_transient: float,
-    rtol: float,
-    atol: float,
-    h_fixed: float,
-    max_steps: int,
-    equilibrium_tol: float,
-    period_tol: float,
-    max_period: int,
+    rs: RunSettings,
     max_points: int,
-    stop_kind: int,
-    dwell: float,
     lanes: int,
     abort: np.ndarray = NO_ABORT,
 ):
@@ -377,17 +341,13 @@ def sweep_chunk(
     or on how values are grouped into chunks. Returns (points (n, max_points,
     n_state), t_points (n, max_points), ints (n, 6) with columns
     SWEEP_INT_FIELDS, t_converged (n,), final_state (n, n_state)); points are
-    in time order and NaN-padded. ``stop_kind``/``dwell``: see :func:`integrate`.
+    in time order and NaN-padded. ``rs``: see :func:`run_settings`.
     A value whose status is still ST_NOT_COMPUTED (-1) was not run (``abort``
     was set); callers must not store it.
     """
     nv = params.shape[0]
     y0s = _starts(y0, nv)
     n = y0s.shape[1]
-    rs = RunSettings(
-        t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol, period_tol,
-        max_period, stop_kind, dwell,
-    )  # fmt: skip
     points, t_points, ints, t_conv, final_state = _outputs(nv, max_points, n)
     # prange splits its range into contiguous blocks, one per thread. Neighbouring
     # values cost about the same (a block of cheap equilibria next to a block of
@@ -423,18 +383,8 @@ def continuation_chunk(
     params: np.ndarray,
     n_osc: int,
     dc: bool,
-    t_end: float,
-    t_transient: float,
-    rtol: float,
-    atol: float,
-    h_fixed: float,
-    max_steps: int,
-    equilibrium_tol: float,
-    period_tol: float,
-    max_period: int,
+    rs: RunSettings,
     max_points: int,
-    stop_kind: int,
-    dwell: float,
     abort: np.ndarray = NO_ABORT,
 ):
     """Continuation mode: chains of values, each starting from the previous final state.
@@ -451,10 +401,6 @@ def continuation_chunk(
     nl = params.shape[1]
     n = y_starts.shape[1]
     flat = params.reshape(nc * nl, params.shape[2])
-    rs = RunSettings(
-        t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol, period_tol,
-        max_period, stop_kind, dwell,
-    )  # fmt: skip
     points, t_points, ints, t_conv, final_state = _outputs(nc * nl, max_points, n)
     starts = np.empty((nc * nl, n))
     for c in range(nc):

@@ -22,6 +22,7 @@ from .driver import (
     drive,
     simple_stop,
 )
+from .jit import JIT
 from .params import N_PARAMS
 from .problems import alloc_bordered_linear, make_tangent
 from .steppers import RODAS5P_METHOD, alloc_workspace
@@ -29,7 +30,7 @@ from .trajectory import X1_MINIMA
 
 __all__ = ["propagate_tangents"]
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_JIT = JIT
 
 
 @njit(**_JIT)

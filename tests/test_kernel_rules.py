@@ -67,7 +67,7 @@ def test_eps_1e103_ends_within_max_steps():
     r = ssf.simulate(s, 300.0, 200.0, y0=[0.01, 0, 0, 0], max_steps=1000)
     assert r.status in ("nonfinite", "step-underflow", "max-steps")
     assert r.n_steps + r.n_rejected <= 2000
-    r = ssf.sweep(ASYM, "eps", [1e-5, 1e103], max_steps=10_000, **KW)
+    r = ssf.sweep(ASYM, "eps", [1e-5, 1e103], max_steps=100_000, **KW)
     assert r.status[0] == "ok" and r.status[1] in FAILURE_STATUSES
     assert time.perf_counter() - t0 < 120  # generous: only a hang can fail this
 
@@ -77,7 +77,8 @@ def test_continuation_continues_from_the_last_good_state():
     cont = ssf.sweep(ASYM, "c", cs, mode="continuation", **KW)
     rest = ssf.sweep(ASYM, "c", cs, mode="restart", **KW)
     assert cont.status[0] in FAILURE_STATUSES  # negative damping blows up
-    assert list(cont.status[1:]) == list(rest.status[1:]) == ["ok", "ok", "ok"]
+    # the classification of the later values is the restart one (c = 0.02 damps to rest)
+    assert list(cont.status[1:]) == list(rest.status[1:]) == ["ok", "ok", "equilibrium"]
     # the first good value started from y0 again, like restart mode
     assert cont.n_steps[1] == rest.n_steps[1]
     np.testing.assert_array_equal(cont.points[1], rest.points[1])
@@ -111,3 +112,18 @@ def test_ctrl_c_stops_compiled_work_promptly(what, tmp_path):
     waited = time.perf_counter() - sent
     assert "KeyboardInterrupt" in err and "SystemError" not in err
     assert waited < 10.0, waited  # within about a second on a quiet machine
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
+def test_ctrl_c_on_cli_simulate_says_interrupted_and_exits_130():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "stickslip_fast.cli", "simulate", "--preset", "literature",
+         "--t-end", "5e6", "--max-points", "10"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    time.sleep(10.0)
+    assert proc.poll() is None
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err.strip().splitlines()[-1] == "stickslip-fast: interrupted", err
