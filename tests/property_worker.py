@@ -91,8 +91,29 @@ def _statuses():
 
 
 def ping() -> bool:
-    """Import and compile in the child before the timed examples start."""
-    import stickslip_fast as ssf
+    """Import and compile in the child before the timed examples start.
 
-    ssf.simulate(ssf.System.preset("asymmetric"), 20.0, 0.0)
+    Every kernel specialisation the examples can reach (drives, disk counts,
+    methods, sweep modes) is compiled here, outside the per-example timeout: on
+    an empty Numba cache compiling takes minutes on a loaded machine.
+    """
+    import tempfile
+    import warnings
+
+    import stickslip_fast as ssf
+    from stickslip_fast.sweep import sweep
+
+    warnings.simplefilter("ignore")
+    for drive in ("constant", "dc-motor"):
+        for n in (1, 2):
+            system = ssf.System.preset("asymmetric", drive=drive, n_oscillators=n)
+            for method in ("rodas5p", "dopri5"):
+                ssf.simulate(system, 5.0, 0.0, method=method, sample_dt=1.0)
+                for mode in ("restart", "continuation", "continuation-both"):
+                    sweep(system, "eta", [2.0, 3.0], t_end=5.0, mode=mode, method=method,
+                          progress=False)  # fmt: skip
+            sweep(system, ("eta", "k12"), ([2.0, 3.0], [0.0, 0.1]), t_end=5.0, progress=False)
+    with tempfile.TemporaryDirectory() as tmp:
+        sweep(ssf.System.preset("asymmetric"), "eta", [2.0, 3.0], t_end=5.0, progress=False,
+              out=f"{tmp}/warm.h5")  # fmt: skip
     return True

@@ -7,11 +7,8 @@ with one line on the CLI), or a classified result whose "ok" is backed by a
 computed orbit (steps taken, finite Poincare points). Each example runs in a
 child process under a timeout, so a hang fails the test instead of stalling it.
 
-Extreme magnitudes (mu = 1e300, eps = 1e103, Tb = 1e-300, ...) that used to
-hit defects of the compiled kernels (issue 14 items 1, 2, 5) are the explicit
-cases at the end.
-Values whose checking belongs to issue 14 items 12-13 (rtol = 1,
-max_points = 0, max_steps = 2.7, ...) are likewise left out.
+The issue's reproducers for the kernels (mu = 1e300, c = 1e200, Tb = 1e-300,
+eps = 1e103, y0 = 1e155) are fixed cases at the end.
 
 Cost: ~30-40 s (a few dozen examples each, derandomized, t_end <= 40).
 """
@@ -133,17 +130,15 @@ def test_random_system_fields(worker, fields, t_transient):
 
 
 # -------------------------------------------------------- simulate arguments
-# Wrong *types* of simulate arguments (t_end=None, "30", max_steps=2.7, ...) are
-# issue 14 item 13 (branch pylayer); add them here once that is merged.
 _ARGS = {
-    "t_end": [5.0, 20.0, 40.0, 0.0, -5.0, math.nan, math.inf],
+    "t_end": [5.0, 20.0, 40.0, 0.0, -5.0, math.nan, math.inf, "30", None],
     "t_transient": [0.0, 2.0, 100.0, -1.0, math.nan],
     "method": ["rodas5p", "dopri5", "dopri5-fixed", "euler", 3],
-    "rtol": [1e-6, 1e-9, 0.0, -1.0, math.nan],
+    "rtol": [1e-6, 1e-9, 0.0, -1.0, math.nan, "x", 1.0],
     "atol": [1e-8, 1e-12, 0.0, -1e-9, math.inf],
     "h": [1e-3, 0.0, -1e-3],
     "max_points": [5, 100, -1, 2.5],
-    "max_steps": [100, 200_000, 0, -3],
+    "max_steps": [100, 200_000, 0, -3, 2.7],
     "y0": [[0.01, 0.0, 0.0, 0.0], [0.1, 0.01, 0.0, 0.0], [1.0, 2.0], "x", [math.nan, 0, 0, 0]],
     "sample_dt": [0.5, 0.0, -1.0, math.nan],
 }
@@ -326,24 +321,25 @@ def test_random_toml_documents_through_the_cli(worker, tmp_path_factory, data, c
         assert sw["ok_steps"], (text, sw)
 
 
-# ------------------------------------- extreme magnitudes (issue 14 items 1, 2, 5)
-# Before the driver rewrite these raised ZeroDivisionError inside the kernel
-# (mu, c, Tb) or looped forever past max_steps (eps).
-_EXTREME = [
-    pytest.param({"mu": 1e300}, id="mu=1e300"),
-    pytest.param({"c": 1e200}, id="c=1e200"),
-    pytest.param({"Tb": 1e-300, "drive": "dc-motor"}, id="Tb=1e-300"),
-    pytest.param({"eps": 1e103}, id="eps=1e103"),
-]
-
-
-@pytest.mark.parametrize("fields", _EXTREME)
-def test_extreme_magnitudes_give_a_classified_result(worker, fields):
-    y0 = [0.01, 0.0, 0.0, 0.0] + ([0.0] if fields.get("drive") == "dc-motor" else [])
+# ------------------------------------- extreme magnitudes (issue 14, items 1, 2, 5)
+@pytest.mark.parametrize(
+    "fields, y0",
+    [
+        ({"mu": 1e300}, [0.01, 0.0, 0.0, 0.0]),
+        ({"c": 1e200}, [0.01, 0.0, 0.0, 0.0]),
+        ({"Tb": 1e-300, "drive": "dc-motor"}, [0.01, 0.0, 0.0, 0.0, 0.0]),
+        ({"eps": 1e103}, [0.01, 0.0, 0.0, 0.0]),
+        ({}, [1e155, 0.0, 0.0, 0.0]),
+    ],
+    ids=["mu=1e300", "c=1e200", "Tb=1e-300", "eps=1e103", "y0=1e155"],
+)
+def test_extreme_magnitudes_give_a_classified_result(worker, fields, y0):
+    """The issue's reproducers: once a ZeroDivisionError or an endless loop."""
     sim_kw = dict(t_end=300.0, t_transient=200.0, max_steps=1000, y0=y0)
     out = worker.call(property_worker.system_then_simulate, fields, sim_kw, timeout=20.0)
     assert out["kind"] != "hang", out
     if out["kind"] == "raised":  # rejected by validation, naming the field: also fine
-        assert "ValueError" in out["bases"] and _names(out["message"], fields), out
+        assert "ValueError" in out["bases"], out
+        assert _names(out["message"], [*fields, "y0"]), out
         return
     _check_result(out)
