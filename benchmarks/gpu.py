@@ -75,10 +75,15 @@ def _require_gpu():
 SIM = _require_gpu()
 
 import numba  # noqa: E402
+from numba import cuda  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
 from stickslip_fast import cuda_backend as cb  # noqa: E402
-from stickslip_fast.chunks import WorkUnit, compute_restart_chunk  # noqa: E402
+from stickslip_fast.chunks import (  # noqa: E402
+    WorkUnit,
+    compute_continuation_chunk,
+    compute_restart_chunk,
+)
 from stickslip_fast.settings import Settings  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -109,8 +114,8 @@ def occupancy(regs: int, tpb: int, dev) -> dict:
     }
 
 
-def kernel_facts(system, tpb: int) -> dict:
-    k = cb.get_kernel(system.n_oscillators, system.is_dc_motor)
+def kernel_facts(system, tpb: int, max_registers=None) -> dict:
+    k = cb.get_kernel(system.n_oscillators, system.is_dc_motor, max_registers)
     if SIM:
         return {"registers_per_thread": None, "local_bytes_per_thread": None}
     regs = k.get_regs_per_thread()
@@ -119,14 +124,11 @@ def kernel_facts(system, tpb: int) -> dict:
         regs = max(regs.values())
     if isinstance(lmem, dict):
         lmem = max(lmem.values())
-    from numba import cuda
-
     out = {"registers_per_thread": int(regs), "local_bytes_per_thread": int(lmem)}
     out.update(occupancy(int(regs), tpb, cuda.get_current_device()))
     return out
 
 
-# ------------------------------------------------------------------ measuring
 def divergence(steps: np.ndarray, tpb: int) -> dict:
     """Per block of tpb consecutive values: slowest thread's steps / median thread's."""
     n = steps.size // tpb * tpb
@@ -145,60 +147,90 @@ def divergence(steps: np.ndarray, tpb: int) -> dict:
     }
 
 
-def gpu_run(system, names, vals, settings, chunk, tpb, budget):
-    """Restart chunks on the GPU, two launches in flight; returns timing and per-value fields."""
+def gpu_run(system, names, vals, settings, chunk, tpb, budget, starts=None, max_registers=None):
+    """Values (or (value, start) pairs) through the CUDA runner; timing and per-value fields.
+
+    After ``budget`` seconds nothing more is submitted, and the launches in
+    flight are collected (the result is then marked partial).
+    """
     y0 = system.initial_state(None)
-    chunk = chunk or cb.default_chunk_size(system, settings)
-    run = cb.cuda_runner(system, settings, "restart", threads_per_block=tpb)
+    mode = "restart" if starts is None else "census"
+    run = cb.cuda_runner(system, settings, mode, threads_per_block=tpb,
+                         max_registers=max_registers)  # fmt: skip
+    chunk = chunk or run.default_chunk_size
     stop = []
-
-    def units():  # after the budget, submit nothing more but collect what is in flight
-        for a in range(0, len(vals), chunk):
-            if stop:
-                return
-            yield WorkUnit("restart", vals[a : a + chunk], [])
-
-    period, status, steps = [], [], []
     t0 = time.perf_counter()
+
+    def units():
+        for a in range(0, len(vals), chunk):
+            if stop or time.perf_counter() - t0 > budget:
+                return
+            if starts is None:
+                yield WorkUnit(
+                    "restart", vals[a : a + chunk], list(range(a, a + len(vals[a : a + chunk])))
+                )
+            else:
+                v = vals[a : a + chunk]
+                yield WorkUnit("continuation", v[:, None, :], list(range(a, a + len(v))),
+                               np.ascontiguousarray(starts[a : a + chunk]))  # fmt: skip
+
+    n = len(vals)
+    period = np.full(n, -9, dtype=np.int64)
+    status = np.full(n, -9, dtype=np.int64)
+    steps = np.full(n, -1, dtype=np.int64)
     done = 0
-    gen = run(units(), system, names, y0, settings)
-    for unit, res in gen:
-        period.append(res["period"])
-        status.append(res["status"])
-        steps.append(res["n_steps"] + res["n_rejected"])
-        done += len(unit.values)
-        if time.perf_counter() - t0 > budget and not stop:
-            stop.append(True)
-    partial = done < len(vals)
+    for unit, res in run(units(), system, names, y0, settings):
+        idx = np.asarray(unit.targets)
+        sq = (lambda x: x[:, 0]) if starts is not None else (lambda x: x)
+        period[idx] = sq(res["period"])
+        status[idx] = sq(res["status"])
+        steps[idx] = sq(res["n_steps"] + res["n_rejected"])
+        done += len(idx)
     dt = time.perf_counter() - t0
+    got = steps >= 0
     return {
         "values": int(done),
-        "of": int(len(vals)),
-        "partial": partial,
+        "of": int(n),
+        "partial": bool(done < n),
         "seconds": dt,
         "traj_per_s": done / dt,
-        "period": np.concatenate(period),
-        "status": np.concatenate(status),
-        "steps": np.concatenate(steps),
+        "chunk": int(chunk),
+        "max_in_flight": cb.MAX_IN_FLIGHT,
+        "steps_median": float(np.median(steps[got])),
+        "steps_max": int(steps[got].max()),
+        "period": period[got],
+        "status": status[got],
+        "steps": steps[got],
+        "done_mask": got,
     }
 
 
-def cpu_run(system, names, vals, settings, threads):
+def cpu_warm(system, settings):
+    """Compile (or load) the CPU kernels outside the timings."""
+    compute_restart_chunk(system, ("eta",), np.array([[2.0]]), system.initial_state(None),
+                          settings.replace(t_end=1.0, t_transient=0.0))  # fmt: skip
+
+
+def cpu_run(system, names, vals, settings, threads, starts=None):
     y0 = system.initial_state(None)
     old = numba.get_num_threads()
     numba.set_num_threads(threads)
     try:
         t0 = time.perf_counter()
-        res = compute_restart_chunk(system, names, vals, y0, settings)
+        if starts is None:
+            res = compute_restart_chunk(system, names, vals, y0, settings)
+        else:
+            res = compute_continuation_chunk(system, names, vals[:, None, :], starts, y0, settings)
+            res = {k: v[:, 0] for k, v in res.items()}
         dt = time.perf_counter() - t0
     finally:
         numba.set_num_threads(old)
     return dt, res
 
 
-def compare(system, names, vals, settings, tpb, cpu_res) -> dict:
+def compare(system, names, vals, settings, tpb, cpu_res, starts=None) -> dict:
     gpu = cb.compute_restart_chunk_cuda(
-        system, names, vals, system.initial_state(None), settings, tpb
+        system, names, vals, system.initial_state(None) if starts is None else starts, settings, tpb
     )
     ok = (cpu_res["status"] == 0) & (gpu["status"] == 0)
     diff = (
@@ -206,41 +238,69 @@ def compare(system, names, vals, settings, tpb, cpu_res) -> dict:
         if ok.any()
         else np.zeros(0)
     )
-    return {
+    out = {
         "values": int(len(vals)),
         "status_equal": int(np.sum(gpu["status"] == cpu_res["status"])),
         "period_equal": int(np.sum(gpu["period"] == cpu_res["period"])),
+        "steps_equal": int(np.sum(gpu["n_steps"] == cpu_res["n_steps"])),
         "orbits_compared": int(ok.sum()),
         "orbits_points_within_1e-9": int(np.sum(diff <= 1e-9)),
         "max_point_diff_median": float(np.median(diff)) if diff.size else None,
         "max_point_diff_max": float(diff.max()) if diff.size else None,
     }
+    if "t_converged" in gpu:
+        a, b = gpu["t_converged"], cpu_res["t_converged"]
+        out["t_converged_nan_equal"] = int(np.sum(np.isnan(a) == np.isnan(b)))
+        both = np.isfinite(a) & np.isfinite(b)
+        out["t_converged_max_rel_diff"] = (
+            float(np.max(np.abs(a[both] - b[both]) / b[both])) if both.any() else None
+        )
+    return out
 
 
-def workload(name, system, names, vals, settings, args, log):
+def workload(name, system, names, vals, settings, args, log, starts=None):
     tpb = args.threads_per_block
-    log(f"[{name}] {len(vals)} values on the GPU ...")
-    g = gpu_run(system, names, vals, settings, args.chunk, tpb, args.budget_s)
-    stride = max(1, len(vals) // args.cpu_values)
-    sub = vals[::stride][: args.cpu_values]
+    log(f"[{name}] {len(vals)} runs on the GPU ...")
+    g = gpu_run(system, names, vals, settings, args.chunk, tpb, args.budget_s, starts)
+    idx = np.flatnonzero(g["done_mask"])  # the CPU runs a strided subsample of what the GPU did
+    sub_i = idx[:: max(1, len(idx) // args.cpu_values)][: args.cpu_values]
+    sub = vals[sub_i]
+    sub_s = None if starts is None else starts[sub_i]
     ncores = numba.config.NUMBA_NUM_THREADS
-    log(f"[{name}] {len(sub)} strided values on {ncores} CPU threads ...")
-    cpu_all_s, cpu_res = cpu_run(system, names, sub, settings, ncores)
-    sub2 = sub[:: max(1, len(sub) // args.cpu2_values)][: args.cpu2_values]
-    log(f"[{name}] {len(sub2)} strided values on 2 CPU threads ...")
-    cpu2_s, _ = cpu_run(system, names, sub2, settings, min(2, ncores))
+    log(f"[{name}] {len(sub)} strided runs on {ncores} CPU threads ...")
+    cpu_all_s, cpu_res = cpu_run(system, names, sub, settings, ncores, sub_s)
+    k2 = max(1, len(sub) // args.cpu2_values)
+    sub2, sub2_s = (
+        sub[::k2][: args.cpu2_values],
+        None if starts is None else sub_s[::k2][: args.cpu2_values],
+    )
+    log(f"[{name}] {len(sub2)} strided runs on 2 CPU threads ...")
+    cpu2_s, _ = cpu_run(system, names, sub2, settings, min(2, ncores), sub2_s)
     log(f"[{name}] GPU vs CPU on the subsample ...")
-    agree = compare(system, names, sub, settings, tpb, cpu_res)
+    agree = compare(system, names, sub, settings, tpb, cpu_res, sub_s)
     cpu_rate = len(sub) / cpu_all_s
     cpu2_rate = len(sub2) / cpu2_s
+    # the slowest runs: GPU steps against the CPU's for the same runs
+    top = np.argsort(g["steps"])[::-1][:5]
+    top_i = idx[top]
+    _, cpu_top = cpu_run(system, names, vals[top_i], settings, ncores,
+                         None if starts is None else starts[top_i])  # fmt: skip
+    slowest = [
+        {"values": [float(x) for x in vals[i]], "gpu_steps": int(g["steps"][t]),
+         "cpu_steps": int(cpu_top["n_steps"][j] + cpu_top["n_rejected"][j]),
+         "period": int(g["period"][t]), "status": int(g["status"][t])}
+        for j, (t, i) in enumerate(zip(top, top_i))
+    ]  # fmt: skip
     out = {
         "name": name,
-        "gpu": {k: v for k, v in g.items() if k not in ("period", "status", "steps")},
+        "stop": settings.stop,
+        "gpu": {k: v for k, v in g.items() if k not in ("period", "status", "steps", "done_mask")},
         "cpu_all_cores": {"threads": ncores, "values": len(sub), "seconds": cpu_all_s, "traj_per_s": cpu_rate},
         "cpu_2_cores": {"threads": min(2, ncores), "values": len(sub2), "seconds": cpu2_s, "traj_per_s": cpu2_rate},
         "speedup_vs_all_cores": g["traj_per_s"] / cpu_rate,
         "speedup_vs_2_cores": g["traj_per_s"] / cpu2_rate,
         "divergence": divergence(g["steps"], tpb),
+        "slowest_runs": slowest,
         "agreement_on_subsample": agree,
         "periods_found": {str(int(p)): int(c) for p, c in zip(*np.unique(g["period"], return_counts=True))},
     }  # fmt: skip
@@ -248,14 +308,23 @@ def workload(name, system, names, vals, settings, args, log):
     return out
 
 
-def block_scan(system, vals, settings, sizes, budget, log) -> list[dict]:
+def register_scan(system, settings, caps, tpb, budget, log) -> list[dict]:
+    """Throughput against the register cap, on 4 launches' worth of period-2 values."""
     rows = []
-    for tpb in sizes:
-        g = gpu_run(system, ("eta",), vals, settings, len(vals), tpb, budget)
-        row = {"threads_per_block": tpb, "traj_per_s": g["traj_per_s"]}
-        row.update(kernel_facts(system, tpb))
+    n = 4 * cb.default_chunk_size(system, settings)
+    vals = np.linspace(5.5, 10.0, n)[:, None]  # period-2 region: uniform cost per value
+    for cap in caps:
+        t0 = time.perf_counter()
+        kernel_facts(system, tpb, cap)
+        cb.compute_restart_chunk_cuda(system, ("eta",), vals[:1], system.initial_state(None),
+                                      settings, tpb, cap)  # fmt: skip
+        comp = time.perf_counter() - t0
+        g = gpu_run(system, ("eta",), vals, settings, None, tpb, budget, max_registers=cap)
+        row = {"max_registers": cap, "compile_s": comp, "traj_per_s": g["traj_per_s"],
+               "values": g["values"]}  # fmt: skip
+        row.update(kernel_facts(system, tpb, cap))
         rows.append(row)
-        log(f"[block scan] {row}")
+        log(f"[register scan] {row}")
     return rows
 
 
@@ -264,79 +333,108 @@ def markdown(res: dict) -> str:
         f"GPU: {res['device']['name']}  |  CPU: {res['machine']['cpu_model']} "
         f"({res['machine']['cores']} threads)  |  {res['when']}",
         "",
-        "| workload | values (GPU) | GPU traj/s | CPU traj/s (all cores) | CPU traj/s (2 cores) "
-        "| × all cores | × 2 cores | slowest/median per block (median, p90) | lock-step efficiency |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| workload | stop | runs (GPU) | GPU runs/s | CPU runs/s (all cores) | CPU runs/s (2 cores) "
+        "| × all cores | × 2 cores | slowest/median steps per block (median, p90) "
+        "| lock-step efficiency | agreement (status, period, points ≤ 1e-9) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for w in res["workloads"]:
-        g, d = w["gpu"], w["divergence"]
+        g, d, a = w["gpu"], w["divergence"], w["agreement_on_subsample"]
         lines.append(
-            f"| {w['name']} | {g['values']}{' (partial)' if g['partial'] else ''} "
+            f"| {w['name']} | {w['stop']} | {g['values']}{' (partial)' if g['partial'] else ''} "
             f"| {g['traj_per_s']:.0f} | {w['cpu_all_cores']['traj_per_s']:.1f} "
             f"| {w['cpu_2_cores']['traj_per_s']:.1f} | {w['speedup_vs_all_cores']:.1f} "
             f"| {w['speedup_vs_2_cores']:.1f} | {d.get('slowest_over_median_median', float('nan')):.2f}, "
             f"{d.get('slowest_over_median_p90', float('nan')):.2f} "
-            f"| {d.get('lockstep_efficiency', float('nan')):.2f} |"
+            f"| {d.get('lockstep_efficiency', float('nan')):.2f} "
+            f"| {a['status_equal']}, {a['period_equal']}, {a['orbits_points_within_1e-9']}"
+            f"/{a['orbits_compared']} of {a['values']} |"
         )
     k = res["kernel"]
-    lines += ["", f"Kernel (N = 1, constant belt, {res['threads_per_block']} threads/block): {k}"]
-    if res["block_scan"]:
-        lines += ["", "| threads/block | traj/s | theoretical occupancy |", "|---|---|---|"]
-        for r in res["block_scan"]:
+    lines += ["", f"Kernel (N = 1, constant belt, {res['threads_per_block']} threads/block): {k}",
+              f"First launch (compile): {res.get('compile_seconds', float('nan')):.1f} s"]  # fmt: skip
+    if res.get("register_scan"):
+        lines += ["", "| register cap | registers | local bytes | theoretical occupancy | runs/s |",
+                  "|---|---|---|---|---|"]  # fmt: skip
+        for r in res["register_scan"]:
             lines.append(
-                f"| {r['threads_per_block']} | {r['traj_per_s']:.0f} "
-                f"| {r.get('theoretical_occupancy', float('nan')):.3f} |"
+                f"| {r['max_registers']} | {r.get('registers_per_thread')} "
+                f"| {r.get('local_bytes_per_thread')} "
+                f"| {r.get('theoretical_occupancy', float('nan')):.3f} | {r['traj_per_s']:.0f} |"
             )
-    for w in res["workloads"]:
-        lines.append(
-            f"\n{w['name']}: agreement with the CPU on the subsample: {w['agreement_on_subsample']}"
-        )
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--fig6-sizes", default="10000,100000", help="values of the Fig. 6 sweeps")
     ap.add_argument(
-        "--map-size", type=int, default=1000, help="values per axis of the (eta, k12) map"
+        "--fig6-sizes", default="10000,100000", help="values of the Fig. 6 sweeps (fixed stop)"
     )
     ap.add_argument(
-        "--cpu-values", type=int, default=1600, help="strided subsample run on all CPU cores"
+        "--converged-size",
+        type=int,
+        default=100000,
+        help="values of the Fig. 6 sweep with converged stopping (0 to skip)",
     )
     ap.add_argument(
-        "--cpu2-values", type=int, default=200, help="strided subsample run on 2 CPU cores"
+        "--map-size",
+        type=int,
+        default=1000,
+        help="values per axis of the (eta, k12) map (converged stopping; 0 to skip)",
+    )
+    ap.add_argument(
+        "--census-values",
+        type=int,
+        default=1000,
+        help="values of the Fig. 6 census, 64 starts each (0 to skip)",
+    )
+    ap.add_argument(
+        "--cpu-values", type=int, default=800, help="strided subsample run on all CPU cores"
+    )
+    ap.add_argument(
+        "--cpu2-values", type=int, default=100, help="strided subsample run on 2 CPU cores"
     )
     ap.add_argument("--threads-per-block", type=int, default=cb.THREADS_PER_BLOCK)
     ap.add_argument(
-        "--block-sizes",
-        default="32,64,128,256",
-        help="block-size scan on 1e4 Fig. 6 values ('' to skip)",
+        "--register-caps",
+        default="0,128,96,64",
+        help="register caps to scan (0 = the compiler's choice; '' to skip)",
     )
     ap.add_argument("--chunk", type=int, help="values per launch (default: the backend's)")
     ap.add_argument(
-        "--budget-s", type=float, default=90.0,
-        help="GPU seconds per workload, about (then it reports the values done; the whole run "
-        "stays under ~8 min with the defaults)",
-    )  # fmt: skip
+        "--budget-s",
+        type=float,
+        default=45.0,
+        help="GPU seconds per workload, about (then it reports the runs done)",
+    )
+    ap.add_argument(
+        "--deadline-s",
+        type=float,
+        default=480.0,
+        help="skip what is left after this many seconds (the JSON keeps what ran)",
+    )
     ap.add_argument("--t-end", type=float, default=3000.0)
     ap.add_argument("--t-transient", type=float, default=2000.0)
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "gpu.json"))
-    args = ap.parse_args(argv)
+    args = ap.parse_args(argv)  # fmt: skip
     if SIM:  # testing this script: tiny workloads, and say loudly that this is no measurement
         print(
             "NUMBA_ENABLE_CUDASIM=1: numba's CUDA simulator, NOT a GPU; tiny workloads.",
             file=sys.stderr,
         )
-        args.fig6_sizes, args.map_size, args.block_sizes = "8", 2, ""
+        args.fig6_sizes, args.map_size, args.register_caps = "8", 2, ""
+        args.converged_size, args.census_values = 4, 2
         args.cpu_values, args.cpu2_values, args.chunk, args.threads_per_block = 4, 2, 4, 4
         args.t_end, args.t_transient = 20.0, 10.0
         args.out = os.path.join(tempfile.gettempdir(), "stickslip_gpu_simulator.json")
+    t_start = time.perf_counter()
 
     def log(msg):
         print(msg, file=sys.stderr, flush=True)
 
     asym = ssf.System.preset("asymmetric")
     fig6 = settings_for(args.t_end, args.t_transient, 256)
+    conv = fig6.replace(stop="converged")
     res = {
         "when": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
         "simulator": SIM,
@@ -347,34 +445,65 @@ def main(argv=None) -> int:
         "settings": {"t_end": args.t_end, "t_transient": args.t_transient},
         "kernel": None,  # after the first launch has compiled it
         "workloads": [],
-        "block_scan": [],
+        "register_scan": [],
+        "skipped": [],
     }  # fmt: skip
+
+    def save():
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(json.dumps(res, indent=1, default=float))
+
     log("compiling the kernel (first launch) ...")
     t0 = time.perf_counter()
     cb.compute_restart_chunk_cuda(asym, ("eta",), np.array([[5.0]]), asym.initial_state(None), fig6)
     res["compile_seconds"] = time.perf_counter() - t0
     res["kernel"] = kernel_facts(asym, args.threads_per_block)
+    log(f"compiled in {res['compile_seconds']:.1f} s: {res['kernel']}")
+    t0 = time.perf_counter()
+    cpu_warm(asym, fig6)
+    res["cpu_compile_seconds"] = time.perf_counter() - t0
+    save()
 
-    sizes = [int(s) for s in args.block_sizes.split(",") if s]
-    if sizes:
-        res["block_scan"] = block_scan(
-            asym, np.linspace(1, 10, 10000)[:, None], fig6, sizes, args.budget_s / 4, log
+    jobs = []
+    for n in (int(x) for x in args.fig6_sizes.split(",") if x):
+        jobs.append(
+            (f"Fig. 6, {n} values", ("eta",), np.linspace(1.0, 10.0, n)[:, None], fig6, None)
         )
-    for n in (int(s) for s in args.fig6_sizes.split(",") if s):
-        vals = np.linspace(1.0, 10.0, n)[:, None]
-        res["workloads"].append(
-            workload(f"Fig. 6, {n} values", asym, ("eta",), vals, fig6, args, log)
+    if args.converged_size:
+        n = args.converged_size
+        jobs.append(
+            (f"Fig. 6, {n} values", ("eta",), np.linspace(1.0, 10.0, n)[:, None], conv, None)
         )
-    m = args.map_size
-    if m > 0:
+    if args.census_values:
+        from stickslip_fast.census import _check_starts
+
+        nv = args.census_values
+        starts, _ = _check_starts(asym, 64, None, None, 0, True, "eta", np.array([2.0]))
+        v = np.repeat(np.linspace(1.0, 10.0, nv), len(starts))[:, None]
+        st = np.tile(starts, (nv, 1))
+        jobs.append((f"census, {nv} values x {len(starts)} starts", ("eta",), v,
+                     settings_for(args.t_end, 0.0, 128).replace(stop="converged"), st))  # fmt: skip
+    if args.map_size:
+        m = args.map_size
         eta, k12 = np.meshgrid(np.linspace(1, 10, m), np.linspace(-0.9, 0.9, m), indexing="ij")
         vals = np.stack([eta.ravel(), k12.ravel()], axis=-1)
-        res["workloads"].append(
-            workload(f"period map {m}x{m} (eta, k12)", asym, ("eta", "k12"), vals,
-                     settings_for(args.t_end, args.t_transient, 64), args, log)
-        )  # fmt: skip
-    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(res, indent=1, default=float))
+        jobs.append((f"period map {m}x{m} (eta, k12)", ("eta", "k12"), vals,
+                     settings_for(args.t_end, args.t_transient, 64).replace(stop="converged"), None))  # fmt: skip
+    for name, names, vals, settings, starts in jobs:
+        if time.perf_counter() - t_start > args.deadline_s:
+            res["skipped"].append(name)
+            log(f"[{name}] skipped: past the deadline")
+            continue
+        res["workloads"].append(workload(name, asym, names, vals, settings, args, log, starts))
+        save()
+    caps = [int(c) or None for c in args.register_caps.split(",") if c]
+    if caps and time.perf_counter() - t_start < args.deadline_s:
+        short = settings_for(1000.0, 500.0, 64)
+        res["register_scan"] = register_scan(asym, short, caps, args.threads_per_block,
+                                             args.budget_s / 3, log)  # fmt: skip
+    elif caps:
+        res["skipped"].append("register scan")
+    save()
     print(markdown(res))
     log(f"wrote {args.out}")
     return 0

@@ -258,7 +258,10 @@ def census(
     threads, chunk_size, backend, scheduler, n_workers, progress
         As for :func:`sweep`; ``chunk_size`` counts (value, start) pairs per
         unit of work (default 32 per thread; 64 with ``backend="dask"``, each
-        unit split over the workers). Results do not depend on them.
+        unit split over the workers; with ``backend="cuda"`` one launch of
+        about the threads the GPU holds, docs/gpu.md). Results do not depend
+        on them, except that GPU points differ from the CPU's at ~1e-9, so a
+        file is all-CPU or all-GPU (the backend is part of its configuration).
     method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol, dwell
         As for :func:`sweep`; ``max_points`` defaults to 128 (enough to
         detect any period <= 64); ``dwell`` only with ``stop="converged"``.
@@ -297,7 +300,7 @@ def census(
         raise ValueError(f"stop must be one of {STOP_RULES}, got {stop!r}")
     if backend not in _BACKENDS:
         raise ValueError(f"backend must be one of {_BACKENDS}, got {backend!r}")
-    if backend == "local" and (scheduler is not None or n_workers is not None):
+    if backend != "dask" and (scheduler is not None or n_workers is not None):
         raise ValueError("scheduler and n_workers are only used with backend='dask'")
     if track_threshold is None or not np.isfinite(track_threshold) or track_threshold <= 0:
         raise ValueError(f"track_threshold must be a number > 0, got {track_threshold!r}")
@@ -324,6 +327,8 @@ def census(
         "stop": stop,
         "settings": settings.to_dict(),
     }
+    if backend == "cuda":  # GPU points differ from the CPU's at ~1e-9: never mixed in a file
+        config["backend"] = "cuda"
     layout = CensusLayout(
         param, vals, start_arr, settings.max_points, system.state_names, stop == "converged"
     )
@@ -334,13 +339,19 @@ def census(
         from .backends import dask_runner
 
         runner = dask_runner(scheduler, n_workers)
+    elif backend == "cuda":
+        from .cuda_backend import cuda_runner
+
+        runner = cuda_runner(system, settings, "census")
 
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))
         if chunk_size is None:
             # the Dask runner splits each unit over its workers and waits for the whole
             # unit before the next: units of 64 pairs keep a small cluster busy
-            chunk_size = 32 * nthreads if backend == "local" else 64
+            chunk_size = {"local": 32 * nthreads, "dask": 64}.get(
+                backend, getattr(runner, "default_chunk_size", 64)
+            )
         elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
             raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
         if out is not None:

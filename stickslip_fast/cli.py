@@ -200,12 +200,17 @@ def _cmd_census(args: argparse.Namespace) -> int:
                 f"{c['stop']!r} disagree; give one"
             )
         c["stop"] = integ.pop("stop")
-    backend = "dask" if (args.scheduler or args.workers) else "local"
-    census(
-        cfg.system, c.pop("param"), c.pop("values"), out=args.output, threads=args.threads,
-        progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
-        n_workers=args.workers, title=cfg.title, notes=cfg.notes, **c, **integ,
-    )  # fmt: skip
+    backend = args.backend or ("dask" if (args.scheduler or args.workers) else "local")
+    try:
+        census(
+            cfg.system, c.pop("param"), c.pop("values"), out=args.output, threads=args.threads,
+            progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
+            n_workers=args.workers, title=cfg.title, notes=cfg.notes, **c, **integ,
+        )  # fmt: skip
+    except RuntimeError as exc:
+        if backend != "cuda":
+            raise
+        raise ValueError(str(exc)) from None  # no GPU: one line, not a traceback
     if not args.quiet:
         print(_census_report(args.output))
     return 0
@@ -433,6 +438,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
     p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
     p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.add_argument(
+        "--backend",
+        choices=("local", "dask", "cuda"),
+        help="where runs go (default: local, or dask with --scheduler/--workers); "
+        "cuda: one GPU thread per (value, start) (docs/gpu.md)",
+    )
     p.set_defaults(func=_cmd_census)
 
     p = sub.add_parser("info", help="summarise a result file")

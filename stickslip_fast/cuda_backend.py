@@ -46,8 +46,8 @@ from __future__ import annotations
 
 import math
 import os
+import time
 import warnings
-from collections import deque
 from collections.abc import Iterator
 
 import numpy as np
@@ -59,13 +59,20 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
         'backend="cuda" needs numba-cuda: pip install "stickslip_fast[cuda]"'
     ) from exc
 
-from numba import cuda, float64, int64, njit
+from numba import cuda, float64, int64, njit, types
+
+# numba-cuda <= 0.30.4 registers an overload for np.row_stack when it compiles
+# its first kernel, and NumPy 2.5 removed that alias: the compile then fails with
+# AttributeError (seen on an H200 image with numpy 2.5.2). Restore the alias.
+if not hasattr(np, "row_stack"):  # noqa: NPY201
+    setattr(np, "row_stack", np.vstack)  # noqa: B010
 
 from . import linalg, model, poincare
 from .params import P_ETA, P_ETAP, P_VB0, eta_prime
 from .status import STATUS_NAMES
 from .steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
 from .tableaus import RODAS5P
+from .trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
 
 __all__ = [
     "MAX_OSCILLATORS",
@@ -83,8 +90,10 @@ MAX_OSCILLATORS = 4
 #: Values per unit of work (one kernel launch) when ``sweep(chunk_size=None)``,
 #: at most: enough threads to fill a large GPU twice over (see :func:`default_chunk_size`).
 DEFAULT_CHUNK_SIZE = 262144
-#: Device memory for one launch's outputs, at most (two launches are in flight).
-CHUNK_BYTES = 1 << 30
+#: Device memory for one launch's outputs, at most.
+CHUNK_BYTES = 1 << 29
+#: Launches queued on the GPU at once (each on its own stream).
+MAX_IN_FLIGHT = 6
 #: Threads per block. Each thread needs ~1.5 kB of local memory (Rodas5P's 8
 #: stages, the Jacobian and its factors); 64 keeps occupancy limited by
 #: registers, not by blocks.
@@ -172,6 +181,7 @@ jacobian_blocks = _device_callable(model.jacobian_blocks)
 motion_measure = _device_callable(poincare.motion_measure)
 classify = _device_callable(poincare.classify)
 detect_period = _device_callable(poincare.detect_period)
+ring_period = _device_callable(poincare.ring_period)
 # the bordered O(N) factorisation and solve of W = sigma I - J
 w_factor = _device_callable(linalg.w_factor)
 w_solve = _device_callable(linalg.w_solve)
@@ -284,7 +294,7 @@ def _reverse_rows(pts, tpts, lo, hi):
 _KERNELS: dict = {}
 
 
-def get_kernel(n_osc: int, dc: bool):
+def get_kernel(n_osc: int, dc: bool, max_registers: int | None = None):
     """The sweep kernel specialised (workspace sizes) for ``n_osc`` disks and the drive.
 
     Parameters
@@ -293,38 +303,53 @@ def get_kernel(n_osc: int, dc: bool):
         Number of disks, 1 .. MAX_OSCILLATORS.
     dc : bool
         True for the DC-motor drive (one extra state, v_b).
+    max_registers : int, optional
+        Cap on registers per thread passed to the CUDA compiler (more threads
+        resident, at the price of spills); None lets it choose. Results do not
+        depend on it.
 
     Returns
     -------
     numba CUDA dispatcher
         ``kernel[blocks, threads](y0, params, t_end, t_transient, rtol, atol,
-        h_fixed, max_steps, equilibrium_tol, period_tol, max_period, points,
-        t_points, ints, t_conv, final_state)``: one thread per row of ``params``; the
+        h_fixed, max_steps, equilibrium_tol, period_tol, max_period, converged,
+        dwell, points, t_points, ints, t_conv, final_state)``: one thread per row
+        of ``params``, starting from row ``v`` of ``y0`` (or its only row); the
         outputs have the layout of :func:`stickslip_fast.trajectory.sweep_chunk`.
+        ``converged`` selects the converged stop rule (then pass
+        ``t_transient = 0``, as the CPU kernel records from t = 0).
     """
     n_osc = int(n_osc)
     dc = bool(dc)
     if not 1 <= n_osc <= MAX_OSCILLATORS:
         raise ValueError(f"n_osc must be in 1..{MAX_OSCILLATORS} for the CUDA kernels, got {n_osc}")
-    key = (n_osc, dc)
+    if max_registers is not None:
+        max_registers = int(max_registers)
+        if simulator_enabled():  # the simulator's jit takes no register cap
+            max_registers = None
+    key = (n_osc, dc, max_registers)
     if key not in _KERNELS:
-        _KERNELS[key] = _make_kernel(n_osc, dc)
+        _KERNELS[key] = _make_kernel(n_osc, dc, max_registers)
     return _KERNELS[key]
 
 
-def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
+def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noqa: N803
     NS = 4 * N_OSC + (1 if DC else 0)
     NST = _STAGES
     NDN = _NDENSE
+    MIN_REPEATS = CONVERGED_MIN_REPEATS
+    MIN_POINTS = CONVERGED_MIN_POINTS
+    jit = cuda.jit if max_registers is None else cuda.jit(max_registers=max_registers)
 
-    @cuda.jit
+    @jit
     def sweep_kernel(
         y0, params, t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol,
-        period_tol, max_period, points, t_points, ints, t_conv, final_state,
+        period_tol, max_period, converged, dwell, points, t_points, ints, t_conv, final_state,
     ):  # fmt: skip
         v = cuda.grid(1)
         if v >= params.shape[0]:
             return
+        row0 = v if y0.shape[0] > 1 else 0
         # eta' is filled in on the host. (Copying the row into a local array
         # costs registers and spills, per ptxas: scripts/cuda_ptx_report.py.)
         p = params[v]
@@ -340,6 +365,8 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
         err = cuda.local.array(NS, float64)
         ymin = cuda.local.array(NS, float64)
         ymax = cuda.local.array(NS, float64)
+        wmin = cuda.local.array(NS, float64)  # converged stopping: the rest window
+        wmax = cuda.local.array(NS, float64)
         K = cuda.local.array((NST, NS), float64)
         D = cuda.local.array((NDN, NS), float64)
         jb = cuda.local.array((N_OSC, 4, 4), float64)
@@ -354,11 +381,11 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
                 jrow[i, r] = 0.0
                 z[i, r] = 0.0
         for i in range(NS):
-            y[i] = y0[i]
+            y[i] = y0[row0, i]
             ymin[i] = math.inf
             ymax[i] = -math.inf
 
-        t_conv[v] = math.nan  # converged stopping is not run on the GPU
+        t_conv[v] = math.nan
         # parameters or start not finite: "error", as the CPU kernel
         bad = False
         for i in range(p.shape[0]):
@@ -404,6 +431,11 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
         last_rejected = False
         jac_fresh = False
         jcorner = 0.0
+        # converged stopping (driver.converged_stop, operation for operation)
+        phase = 0  # 1: converged, recording the last points
+        rest_since = math.nan
+        checked = -1
+        target = 0
 
         while t < t_end:
             if n_steps >= max_steps or n_rej >= max_steps:
@@ -519,6 +551,55 @@ def _make_kernel(N_OSC: int, DC: bool):  # noqa: N803  (compile-time constants)
                 h *= fac
                 err_prev = max(en, 1e-10)
                 last_rejected = False
+            if not converged:
+                continue
+            # ---- converged stopping, as driver._converged_now
+            if phase == 1:
+                if n_cross >= target:
+                    break
+                continue
+            at_rest = True
+            for i in range(N_OSC):
+                if not (
+                    abs(y[4 * i + 1]) <= equilibrium_tol and abs(y[4 * i + 3]) <= equilibrium_tol
+                ):
+                    at_rest = False
+            if at_rest:
+                if math.isnan(rest_since):
+                    rest_since = t
+                    for i in range(NS):
+                        wmin[i] = y[i]
+                        wmax[i] = y[i]
+                else:
+                    for i in range(NS):
+                        wmin[i] = min(wmin[i], y[i])
+                        wmax[i] = max(wmax[i], y[i])
+                    if DC and wmax[NS - 1] - wmin[NS - 1] > equilibrium_tol:
+                        rest_since = t
+                        for i in range(NS):
+                            wmin[i] = y[i]
+                            wmax[i] = y[i]
+                if t - rest_since >= dwell:
+                    for i in range(NS):  # the recording window is the dwell window
+                        ymin[i] = wmin[i]
+                        ymax[i] = wmax[i]
+                    t_conv[v] = rest_since
+                    break
+            else:
+                rest_since = math.nan
+            if n_cross != checked:  # repeating points: checked once per new crossing
+                checked = n_cross
+                per = ring_period(pts, n_cross, period_tol, max_period, MIN_REPEATS, MIN_POINTS)
+                # at rest, dx1 flickers around 0 and gives repeating "points"
+                if per > 0 and not at_rest:
+                    phase = 1
+                    t_conv[v] = t
+                    target = min(cap, max(MIN_POINTS, 4 * per))
+                    n_cross = 0  # a fresh recording window from here
+                    checked = 0
+                    for i in range(NS):
+                        ymin[i] = y[i]
+                        ymax[i] = y[i]
 
         # ---- classification, as trajectory._run / _lane_values
         for i in range(NS):
@@ -570,19 +651,27 @@ def _rows_with_etap(rows: np.ndarray) -> np.ndarray:
 
 
 class _Launch:
-    """One kernel launch in flight on its own stream, with its outputs on the device."""
+    """One kernel launch in flight on its own stream, with its outputs on the device.
 
-    def __init__(self, system, rows, y0, settings, max_period, threads_per_block):
+    ``y0`` is one start (n,) for every value or one per value (L, n).
+    """
+
+    def __init__(self, system, rows, y0, settings, max_period, threads_per_block,
+                 max_registers=None):  # fmt: skip
         from .trajectory import SWEEP_INT_FIELDS
 
-        kernel = get_kernel(system.n_oscillators, system.is_dc_motor)
+        kernel = get_kernel(system.n_oscillators, system.is_dc_motor, max_registers)
         nv = rows.shape[0]
-        n = int(y0.size)
+        y0 = np.atleast_2d(np.ascontiguousarray(y0, dtype=np.float64))
+        n = int(y0.shape[1])
         mp = int(settings.max_points)
+        converged = settings.stop == "converged"
+        # converged stopping records from t = 0, as the CPU kernel
+        t_transient = 0.0 if converged else float(settings.t_transient)
         self.stream = cuda.stream()
         s = self.stream
         d_params = cuda.to_device(_rows_with_etap(rows), stream=s)
-        d_y0 = cuda.to_device(np.ascontiguousarray(y0, dtype=np.float64), stream=s)
+        d_y0 = cuda.to_device(y0, stream=s)
         self.d_out = (
             cuda.device_array((nv, mp, n), np.float64, stream=s),
             cuda.device_array((nv, mp), np.float64, stream=s),
@@ -592,11 +681,19 @@ class _Launch:
         )
         blocks = max(1, (nv + threads_per_block - 1) // threads_per_block)
         kernel[blocks, threads_per_block, s](
-            d_y0, d_params, float(settings.t_end), float(settings.t_transient),
+            d_y0, d_params, float(settings.t_end), t_transient,
             float(settings.rtol), float(settings.atol), float(settings.h),
             int(settings.max_steps), float(settings.equilibrium_tol),
-            float(settings.period_tol), int(max_period), *self.d_out,
+            float(settings.period_tol), int(max_period), converged, float(settings.dwell),
+            *self.d_out,
         )  # fmt: skip
+        self.sim = simulator_enabled()  # the simulator runs launches synchronously
+        self.event = cuda.event() if self.sim else cuda.event(timing=False)
+        self.event.record(stream=s)
+
+    def done(self) -> bool:
+        """True once the kernel has finished (never blocks)."""
+        return self.sim or bool(self.event.query())
 
     def result(self) -> tuple[np.ndarray, ...]:
         out = tuple(d.copy_to_host(stream=self.stream) for d in self.d_out)
@@ -606,7 +703,7 @@ class _Launch:
 
 def compute_restart_chunk_cuda(
     system, names, values: np.ndarray, y0: np.ndarray, settings: dict,
-    threads_per_block: int = THREADS_PER_BLOCK,
+    threads_per_block: int = THREADS_PER_BLOCK, max_registers: int | None = None,
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """Restart mode on the GPU: the contract of :func:`stickslip_fast.sweep.compute_restart_chunk`.
 
@@ -616,18 +713,22 @@ def compute_restart_chunk_cuda(
     names : sequence of str
         The swept fields.
     values : ndarray, (L, len(names))
-    y0 : ndarray
-        The initial state.
+    y0 : ndarray, (n,) or (L, n)
+        The initial state, or one per value (a census).
     settings : dict
-        :class:`stickslip_fast.settings.Settings`; method "rodas5p", stop "fixed".
+        :class:`stickslip_fast.settings.Settings`; method "rodas5p", stop
+        "fixed" or "converged".
     threads_per_block : int
         CUDA block size; results do not depend on it.
+    max_registers : int, optional
+        Register cap per thread (see :func:`get_kernel`); results do not depend on it.
 
     Returns
     -------
     dict of ndarray
         As the CPU function: points, t_points, final_state and the per-value
-        integer fields. Status and period equal the CPU's; points agree to ~1e-9.
+        integer fields (and t_converged with converged stopping). Status and
+        period equal the CPU's; points agree to ~1e-9.
     """
     from .chunks import _pack, _param_rows
     from .simulate import MAX_PERIOD
@@ -635,7 +736,7 @@ def compute_restart_chunk_cuda(
     check_available()
     _check_supported(system, settings)
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    launch = _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block)
+    launch = _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block, max_registers)
     return _pack(launch.result(), settings)
 
 
@@ -648,8 +749,6 @@ def unsupported_reason(system, settings: dict) -> str | None:
         )
     if settings.method != "rodas5p":
         return f"the CUDA kernels implement method 'rodas5p' only (asked: {settings.method!r})"
-    if settings.stop != "fixed":
-        return f"the CUDA kernels run to t_end (stop='fixed'; asked: {settings.stop!r})"
     return None
 
 
@@ -659,14 +758,36 @@ def _check_supported(system, settings) -> None:
         raise ValueError(why)
 
 
-def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THREADS_PER_BLOCK):
+def _add_chain_axis(res: dict) -> dict:
+    """Restart-shaped results (L, ...) as those of L one-value chains (L, 1, ...)."""
+    return {k: v[:, None, ...] for k, v in res.items()}
+
+
+def _single_value_chains(unit) -> bool:
+    return unit.kind == "continuation" and np.asarray(unit.values).shape[1] == 1
+
+
+def cuda_runner(
+    system, settings: dict, mode: str, threads_per_block: int = THREADS_PER_BLOCK,
+    max_in_flight: int = MAX_IN_FLIGHT, max_registers: int | None = None,
+):  # fmt: skip
     """The runner for ``sweep(backend="cuda")``: the contract of :func:`chunks.run_local`.
 
-    Restart units run on the GPU, two launches in flight (the next unit
-    computes while the previous one is copied back and written). What the
-    kernels do not cover runs on the CPU kernels, with a warning that says so:
-    continuation units (chains are sequential), N > MAX_OSCILLATORS, methods
+    Restart units (and continuation units whose chains hold one value each,
+    as a census makes: one start per value) run on the GPU, up to
+    ``max_in_flight`` launches at a time, each on its own stream; results are
+    handed back in completion order, so one launch's slowest thread does not
+    hold back the next launches (the writers place every value by its index).
+    What the kernels do not cover runs on the CPU kernels, with a warning that
+    says so: continuation chains (sequential), N > MAX_OSCILLATORS, methods
     other than Rodas5P.
+
+    Parameters
+    ----------
+    system, settings
+        As for the sweep.
+    mode : {"restart", "continuation", "census"}
+        "census": continuation units of one-value chains, each from its own start.
 
     Raises
     ------
@@ -678,52 +799,73 @@ def cuda_runner(system, settings: dict, mode: str, threads_per_block: int = THRE
 
     check_available()
     why = unsupported_reason(system, settings)
-    if why is None and mode != "restart":
+    if why is None and mode not in ("restart", "census"):
         why = f"mode {mode!r} follows each chain value after value"
     if why is not None:
         warnings.warn(
-            f"backend='cuda': {why}; this sweep runs on the CPU (the local backend) instead",
+            f"backend='cuda': {why}; this {'census' if mode == 'census' else 'sweep'} runs on "
+            "the CPU (the local backend) instead",
             UserWarning,
             stacklevel=3,
         )
 
-    def run(units, system, names, y0, settings) -> Iterator[tuple]:
+    def launch(unit, system, names, y0):
+        values = np.asarray(unit.values, dtype=float)
+        if unit.kind != "restart":  # one-value chains, each from its own start
+            values, y0 = values[:, 0, :], unit.y_starts
+        rows = _param_rows(system, names, values)
+        return _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block, max_registers)
+
+    def finish(unit, lau):
+        res = _pack(lau.result(), settings)
+        return res if unit.kind == "restart" else _add_chain_axis(res)
+
+    def run(units, system, names, y0, settings_) -> Iterator[tuple]:
         if why is not None:
-            yield from run_local(units, system, names, y0, settings)
+            yield from run_local(units, system, names, y0, settings_)
             return
-        in_flight: deque = deque()
+        in_flight: list = []
         try:
             for unit in units:
-                rows = _param_rows(system, names, np.asarray(unit.values, dtype=float))
-                in_flight.append(
-                    (unit, _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block))
-                )
-                if len(in_flight) > 1:
-                    done, launch = in_flight.popleft()
-                    yield done, _pack(launch.result(), settings)
+                if unit.kind != "restart" and not _single_value_chains(unit):
+                    raise ValueError("the CUDA runner takes restart units and one-value chains")
+                in_flight.append((unit, launch(unit, system, names, y0)))
+                while len(in_flight) >= max_in_flight:
+                    yield _pop_first_done(in_flight, finish)
             while in_flight:
-                done, launch = in_flight.popleft()
-                yield done, _pack(launch.result(), settings)
+                yield _pop_first_done(in_flight, finish)
         finally:  # closed early (an error, Ctrl-C): leave no kernel running behind us
-            for _, launch in in_flight:
-                launch.stream.synchronize()
+            for _, lau in in_flight:
+                lau.stream.synchronize()
 
     if why is None:  # otherwise the CPU's default applies
         run.default_chunk_size = default_chunk_size(system, settings)
     return run
 
 
-def default_chunk_size(system, settings: dict) -> int:
-    """Values per launch: enough to fill the GPU, within CHUNK_BYTES of outputs.
+def _pop_first_done(in_flight: list, finish) -> tuple:
+    """Wait for any launch in flight to finish; remove it and return (unit, result)."""
+    while True:
+        for k, (unit, lau) in enumerate(in_flight):
+            if lau.done():
+                del in_flight[k]
+                return unit, finish(unit, lau)
+        time.sleep(0.001)
 
-    Twice the threads the GPU holds (multiprocessors x threads per
-    multiprocessor, 2048 on recent GPUs), at most DEFAULT_CHUNK_SIZE and what
-    fits in CHUNK_BYTES; 64 in the simulator. Results do not depend on it.
+
+def default_chunk_size(system, settings: dict) -> int:
+    """Values per launch: about the threads the GPU keeps resident, within CHUNK_BYTES.
+
+    256 per multiprocessor (the kernel's ~190 registers per thread leave room
+    for ~320 resident threads per multiprocessor), so that with
+    MAX_IN_FLIGHT launches queued the GPU stays full while a launch waits for
+    its slowest thread; at most what fits in CHUNK_BYTES of outputs; 64 in the
+    simulator. Results do not depend on it.
     """
     if simulator_enabled():
         return 64
     dev = cuda.get_current_device()
-    fill = 2 * int(dev.MULTIPROCESSOR_COUNT) * int(dev.MAX_THREADS_PER_MULTIPROCESSOR)
+    fill = 256 * int(dev.MULTIPROCESSOR_COUNT)
     per_value = 8 * ((settings.max_points + 1) * (system.n_state + 1) + 6)
     return int(max(1024, min(DEFAULT_CHUNK_SIZE, fill, CHUNK_BYTES // per_value)))
 
@@ -732,7 +874,8 @@ def kernel_signature():
     """The argument types of the sweep kernels (as launched by the backend)."""
     a1, a2, a3, i2 = float64[::1], float64[:, ::1], float64[:, :, ::1], int64[:, ::1]
     f, i = float64, int64
-    return (a1, a2, f, f, f, f, f, i, f, f, i, a3, a2, i2, a1, a2)
+    b = types.boolean
+    return (a2, a2, f, f, f, f, f, i, f, f, i, b, f, a3, a2, i2, a1, a2)
 
 
 def compile_ptx(n_osc: int, dc: bool, cc: tuple[int, int] = (9, 0)) -> str:
