@@ -147,7 +147,8 @@ def divergence(steps: np.ndarray, tpb: int) -> dict:
     }
 
 
-def gpu_run(system, names, vals, settings, chunk, tpb, budget, starts=None, max_registers=None):
+def gpu_run(system, names, vals, settings, chunk, tpb, budget, starts=None, max_registers=None,
+            max_in_flight=None):  # fmt: skip
     """Values (or (value, start) pairs) through the CUDA runner; timing and per-value fields.
 
     After ``budget`` seconds nothing more is submitted, and the launches in
@@ -155,8 +156,9 @@ def gpu_run(system, names, vals, settings, chunk, tpb, budget, starts=None, max_
     """
     y0 = system.initial_state(None)
     mode = "restart" if starts is None else "census"
+    max_in_flight = max_in_flight or cb.MAX_IN_FLIGHT
     run = cb.cuda_runner(system, settings, mode, threads_per_block=tpb,
-                         max_registers=max_registers)  # fmt: skip
+                         max_in_flight=max_in_flight, max_registers=max_registers)  # fmt: skip
     chunk = chunk or run.default_chunk_size
     stop = []
     t0 = time.perf_counter()
@@ -195,7 +197,7 @@ def gpu_run(system, names, vals, settings, chunk, tpb, budget, starts=None, max_
         "seconds": dt,
         "traj_per_s": done / dt,
         "chunk": int(chunk),
-        "max_in_flight": cb.MAX_IN_FLIGHT,
+        "max_in_flight": max_in_flight,
         "steps_median": float(np.median(steps[got])),
         "steps_max": int(steps[got].max()),
         "period": period[got],
@@ -258,10 +260,10 @@ def compare(system, names, vals, settings, tpb, cpu_res, starts=None) -> dict:
     return out
 
 
-def workload(name, system, names, vals, settings, args, log, starts=None):
+def workload(name, system, names, vals, settings, args, log, starts=None, budget=None):
     tpb = args.threads_per_block
     log(f"[{name}] {len(vals)} runs on the GPU ...")
-    g = gpu_run(system, names, vals, settings, args.chunk, tpb, args.budget_s, starts)
+    g = gpu_run(system, names, vals, settings, args.chunk, tpb, budget or args.budget_s, starts)
     idx = np.flatnonzero(g["done_mask"])  # the CPU runs a strided subsample of what the GPU did
     sub_i = idx[:: max(1, len(idx) // args.cpu_values)][: args.cpu_values]
     sub = vals[sub_i]
@@ -315,16 +317,36 @@ def register_scan(system, settings, caps, tpb, budget, log) -> list[dict]:
     vals = np.linspace(5.5, 10.0, n)[:, None]  # period-2 region: uniform cost per value
     for cap in caps:
         t0 = time.perf_counter()
-        kernel_facts(system, tpb, cap)
         cb.compute_restart_chunk_cuda(system, ("eta",), vals[:1], system.initial_state(None),
                                       settings, tpb, cap)  # fmt: skip
-        comp = time.perf_counter() - t0
+        comp = time.perf_counter() - t0  # compiles a capped kernel on its first launch
         g = gpu_run(system, ("eta",), vals, settings, None, tpb, budget, max_registers=cap)
         row = {"max_registers": cap, "compile_s": comp, "traj_per_s": g["traj_per_s"],
                "values": g["values"]}  # fmt: skip
         row.update(kernel_facts(system, tpb, cap))
         rows.append(row)
         log(f"[register scan] {row}")
+    return rows
+
+
+def runner_ab(system, settings, n, tpb, budget, log) -> list[dict]:
+    """The launch schedule, A/B on one workload: the previous one (two launches of
+    ~1e5 values in flight, results in order of submission) against the current
+    default (launches of about the resident threads, MAX_IN_FLIGHT in flight, in
+    completion order). Alternated, twice each."""
+    vals = np.linspace(1.0, 10.0, n)[:, None]
+    per_value = 8 * ((settings.max_points + 1) * (system.n_state + 1) + 6)
+    old_chunk = min(262144, (1 << 30) // per_value)
+    rows = []
+    for rep_ in range(2):
+        for label, chunk, fl in (("previous: 2 in flight", old_chunk, 2),
+                                 ("current default", None, None)):  # fmt: skip
+            g = gpu_run(system, ("eta",), vals, settings, chunk, tpb, budget, max_in_flight=fl)
+            row = {"schedule": label, "repeat": rep_, "chunk": g["chunk"],
+                   "max_in_flight": g["max_in_flight"], "seconds": g["seconds"],
+                   "traj_per_s": g["traj_per_s"], "values": g["values"]}  # fmt: skip
+            rows.append(row)
+            log(f"[runner A/B] {row}")
     return rows
 
 
@@ -362,6 +384,16 @@ def markdown(res: dict) -> str:
                 f"| {r.get('local_bytes_per_thread')} "
                 f"| {r.get('theoretical_occupancy', float('nan')):.3f} | {r['traj_per_s']:.0f} |"
             )
+    if res.get("runner_ab"):
+        lines += ["", "| launch schedule | values per launch | in flight | s | runs/s |",
+                  "|---|---|---|---|---|"]  # fmt: skip
+        for r in res["runner_ab"]:
+            lines.append(
+                f"| {r['schedule']} | {r['chunk']} | {r['max_in_flight']} | {r['seconds']:.2f} "
+                f"| {r['traj_per_s']:.0f} |"
+            )
+    if res.get("skipped"):
+        lines += ["", f"Skipped (past the deadline): {', '.join(res['skipped'])}"]
     return "\n".join(lines)
 
 
@@ -402,6 +434,15 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--chunk", type=int, help="values per launch (default: the backend's)")
     ap.add_argument(
+        "--map-budget-s", type=float, default=150.0, help="GPU seconds for the period map, about"
+    )
+    ap.add_argument(
+        "--ab-size",
+        type=int,
+        default=100000,
+        help="Fig. 6 values for the launch-schedule A/B (0 to skip)",
+    )
+    ap.add_argument(
         "--budget-s",
         type=float,
         default=45.0,
@@ -423,7 +464,7 @@ def main(argv=None) -> int:
             file=sys.stderr,
         )
         args.fig6_sizes, args.map_size, args.register_caps = "8", 2, ""
-        args.converged_size, args.census_values = 4, 2
+        args.converged_size, args.census_values, args.ab_size = 4, 2, 0
         args.cpu_values, args.cpu2_values, args.chunk, args.threads_per_block = 4, 2, 4, 4
         args.t_end, args.t_transient = 20.0, 10.0
         args.out = os.path.join(tempfile.gettempdir(), "stickslip_gpu_simulator.json")
@@ -446,6 +487,7 @@ def main(argv=None) -> int:
         "kernel": None,  # after the first launch has compiled it
         "workloads": [],
         "register_scan": [],
+        "runner_ab": [],
         "skipped": [],
     }  # fmt: skip
 
@@ -494,7 +536,14 @@ def main(argv=None) -> int:
             res["skipped"].append(name)
             log(f"[{name}] skipped: past the deadline")
             continue
-        res["workloads"].append(workload(name, asym, names, vals, settings, args, log, starts))
+        budget = args.map_budget_s if name.startswith("period map") else args.budget_s
+        res["workloads"].append(
+            workload(name, asym, names, vals, settings, args, log, starts, budget)
+        )
+        save()
+    if args.ab_size and time.perf_counter() - t_start < args.deadline_s:
+        res["runner_ab"] = runner_ab(asym, fig6, args.ab_size, args.threads_per_block,
+                                     args.budget_s, log)  # fmt: skip
         save()
     caps = [int(c) or None for c in args.register_caps.split(",") if c]
     if caps and time.perf_counter() - t_start < args.deadline_s:
