@@ -44,6 +44,7 @@ local file with the GPU (or the other way round) is refused.
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import time
@@ -66,6 +67,17 @@ from numba import cuda, float64, int64, njit, types
 # AttributeError (seen on an H200 image with numpy 2.5.2). Restore the alias.
 if not hasattr(np, "row_stack"):  # noqa: NPY201
     setattr(np, "row_stack", np.vstack)  # noqa: B010
+
+
+class _NotReadyFilter(logging.Filter):
+    """numba logs every cuEventQuery that answers "not ready yet" at ERROR level;
+    polling launches for completion asks exactly that, so those records are dropped."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "CUDA_ERROR_NOT_READY" not in record.getMessage()
+
+
+logging.getLogger("numba.cuda.cudadrv.driver").addFilter(_NotReadyFilter())
 
 from . import linalg, model, poincare
 from .params import P_ETA, P_ETAP, P_VB0, eta_prime
