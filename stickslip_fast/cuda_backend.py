@@ -62,6 +62,13 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
 
 from numba import cuda, float64, int64, njit, types
 
+from . import linalg, model, poincare
+from .params import P_ETA, P_ETAP, P_VB0, eta_prime
+from .status import STATUS_NAMES
+from .steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
+from .tableaus import RODAS5P
+from .trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
+
 # numba-cuda <= 0.30.4 registers an overload for np.row_stack when it compiles
 # its first kernel, and NumPy 2.5 removed that alias: the compile then fails with
 # AttributeError (seen on an H200 image with numpy 2.5.2). Restore the alias.
@@ -78,13 +85,6 @@ class _NotReadyFilter(logging.Filter):
 
 
 logging.getLogger("numba.cuda.cudadrv.driver").addFilter(_NotReadyFilter())
-
-from . import linalg, model, poincare
-from .params import P_ETA, P_ETAP, P_VB0, eta_prime
-from .status import STATUS_NAMES
-from .steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
-from .tableaus import RODAS5P
-from .trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
 
 __all__ = [
     "MAX_OSCILLATORS",
