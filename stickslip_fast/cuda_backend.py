@@ -61,6 +61,7 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
     ) from exc
 
 from numba import cuda, float64, int64, njit, types
+from numba.core.errors import NumbaPerformanceWarning
 
 from . import linalg, model, poincare
 from .params import P_ETA, P_ETAP, P_VB0, eta_prime
@@ -692,16 +693,23 @@ class _Launch:
             cuda.device_array((nv, n), np.float64, stream=s),
         )
         blocks = max(1, (nv + threads_per_block - 1) // threads_per_block)
-        kernel[blocks, threads_per_block, s](
+        with warnings.catch_warnings():  # small launches are fine: no occupancy warning
+            warnings.simplefilter("ignore", NumbaPerformanceWarning)
+            self._launch(kernel, blocks, threads_per_block, s, d_y0, d_params, settings,
+                         t_transient, max_period, converged)  # fmt: skip
+        self.sim = simulator_enabled()  # the simulator runs launches synchronously
+        self.event = cuda.event() if self.sim else cuda.event(timing=False)
+        self.event.record(stream=s)
+
+    def _launch(self, kernel, blocks, tpb, s, d_y0, d_params, settings, t_transient,
+                max_period, converged):  # fmt: skip
+        kernel[blocks, tpb, s](
             d_y0, d_params, float(settings.t_end), t_transient,
             float(settings.rtol), float(settings.atol), float(settings.h),
             int(settings.max_steps), float(settings.equilibrium_tol),
             float(settings.period_tol), int(max_period), converged, float(settings.dwell),
             *self.d_out,
         )  # fmt: skip
-        self.sim = simulator_enabled()  # the simulator runs launches synchronously
-        self.event = cuda.event() if self.sim else cuda.event(timing=False)
-        self.event.record(stream=s)
 
     def done(self) -> bool:
         """True once the kernel has finished (never blocks)."""

@@ -56,6 +56,9 @@ POINT_TOL = 1e-9
 # there) but not in t; FMA roundings move it by ~1e-9 relative (seen on an H200).
 TIME_RTOL = 1e-8
 FINAL_TOL = 1e-6
+# t_converged is the end of the step at which the rule fired: step boundaries
+# follow the roundings, so it moves by up to a step (0.24% seen on an H200)
+TCONV_RTOL = 1e-2
 ASYM = ssf.System.preset("asymmetric")
 
 
@@ -71,7 +74,8 @@ def _agree(gpu, cpu):
             continue
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b), err_msg=f)
         if f.startswith("t_"):
-            np.testing.assert_allclose(a, b, rtol=TIME_RTOL, atol=0, err_msg=f)
+            rtol = TCONV_RTOL if f == "t_converged" else TIME_RTOL
+            np.testing.assert_allclose(a, b, rtol=rtol, atol=0, err_msg=f)
         else:
             np.testing.assert_allclose(a, b, rtol=0, atol=POINT_TOL, err_msg=f)
     # final_state is where the run ended, not a section point. At t_end it carries
