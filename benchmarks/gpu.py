@@ -240,9 +240,23 @@ def compare(system, names, vals, settings, tpb, cpu_res, starts=None) -> dict:
         if ok.any()
         else np.zeros(0)
     )
+    # converged stopping: the two may see convergence at different crossings (a
+    # borderline repeat test flipped by roundoff), and then record the same orbit
+    # from another point of its cycle; compare modulo that cyclic shift too
+    shift_diff = []
+    for k in np.flatnonzero(ok):
+        p, c = int(cpu_res["period"][k]), int(cpu_res["count"][k])
+        if p <= 0 or c <= p or int(gpu["count"][k]) != c:
+            continue
+        a, b = gpu["points"][k, : c - p], cpu_res["points"][k, :c]
+        shift_diff.append(min(np.max(np.abs(a - b[s_ : s_ + c - p])) for s_ in range(p + 1)))
+    shift_diff = np.asarray(shift_diff)
     out = {
         "values": int(len(vals)),
         "status_equal": int(np.sum(gpu["status"] == cpu_res["status"])),
+        "orbits_compared_modulo_shift": int(shift_diff.size),
+        "orbits_within_1e-9_modulo_shift": int(np.sum(shift_diff <= 1e-9)),
+        "max_point_diff_modulo_shift": float(shift_diff.max()) if shift_diff.size else None,
         "period_equal": int(np.sum(gpu["period"] == cpu_res["period"])),
         "steps_equal": int(np.sum(gpu["n_steps"] == cpu_res["n_steps"])),
         "orbits_compared": int(ok.sum()),
