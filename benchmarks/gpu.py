@@ -114,6 +114,19 @@ def occupancy(regs: int, tpb: int, dev) -> dict:
     }
 
 
+def gpu_clocks() -> str | None:
+    """One line of nvidia-smi: SM and memory clocks, power, temperature, throttle reasons."""
+    import subprocess
+
+    q = "clocks.sm,clocks.mem,power.draw,temperature.gpu,clocks_event_reasons.active"
+    try:
+        out = subprocess.run(["nvidia-smi", f"--query-gpu={q}", "--format=csv,noheader"],
+                             capture_output=True, text=True, timeout=20)  # fmt: skip
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None
+
+
 def kernel_facts(system, tpb: int, max_registers=None) -> dict:
     k = cb.get_kernel(system.n_oscillators, system.is_dc_motor, max_registers)
     if SIM:
@@ -277,6 +290,7 @@ def compare(system, names, vals, settings, tpb, cpu_res, starts=None) -> dict:
 def workload(name, system, names, vals, settings, args, log, starts=None, budget=None):
     tpb = args.threads_per_block
     log(f"[{name}] {len(vals)} runs on the GPU ...")
+    clocks = gpu_clocks()
     g = gpu_run(system, names, vals, settings, args.chunk, tpb, budget or args.budget_s, starts)
     idx = np.flatnonzero(g["done_mask"])  # the CPU runs a strided subsample of what the GPU did
     sub_i = idx[:: max(1, len(idx) // args.cpu_values)][: args.cpu_values]
@@ -310,6 +324,7 @@ def workload(name, system, names, vals, settings, args, log, starts=None, budget
     out = {
         "name": name,
         "stop": settings.stop,
+        "clocks_before": clocks,  # nvidia-smi: SM, memory clocks, power, temperature, throttling
         "gpu": {k: v for k, v in g.items() if k not in ("period", "status", "steps", "done_mask")},
         "cpu_all_cores": {"threads": ncores, "values": len(sub), "seconds": cpu_all_s, "traj_per_s": cpu_rate},
         "cpu_2_cores": {"threads": min(2, ncores), "values": len(sub2), "seconds": cpu2_s, "traj_per_s": cpu2_rate},
