@@ -5,6 +5,13 @@ belt, 1000 values of eta in [1, 10], t_end 3000 / t_transient 2000) with
 ``stop="fixed"`` and ``stop="converged"`` (same t_end as the cap), alternating
 the two, best of ``repeats``; it also reports how many values agree in status
 and period. ``--quick``: 60 values, one repetition.
+
+It then measures the census cost per start on Fig. 6 (issue 9): a 64-start
+census (converged stopping, cap 3000) on every 10th value of a 200-value grid
+of eta in [1, 10], timed once; the cost of the 200-value census is projected
+from it (the values are an even stride of that grid, so their cost per value
+is representative) and set against the 1000-value fixed-window sweep timed
+above. ``--quick``: 2 values x 16 starts.
 """
 
 from __future__ import annotations
@@ -36,7 +43,9 @@ def run(mode: str, log) -> dict:
     same = (fixed.status == conv.status) & (fixed.period == conv.period)
     tc = conv.t_converged
     best = {k: min(v) for k, v in times.items()}
+    census = census_cost(system, quick, best["fixed"], n_values, log)
     return dict(
+        census=census,
         n_values=n_values,
         repeats=repeats,
         seconds=times,
@@ -48,4 +57,33 @@ def run(mode: str, log) -> dict:
         agree_status_period=int(same.sum()),
         not_converged=int(np.count_nonzero(~np.isfinite(tc))),
         median_t_converged=float(np.nanmedian(tc)),
+    )
+
+
+def census_cost(system, quick: bool, fixed_s: float, fixed_values: int, log) -> dict:
+    """Seconds per start of a Fig. 6 census, and a 200-value census against the fixed sweep."""
+    grid = np.linspace(1.0, 10.0, 200)
+    values = grid[::100] if quick else grid[::10]
+    n_starts = 16 if quick else 64
+    kw = dict(t_end=3000.0, max_points=128, stop="converged", progress=False)
+    ssf.census(system, "eta", values[:1], n_starts=2, **kw)  # compiled outside the timing
+    t0 = time.perf_counter()
+    res = ssf.census(system, "eta", values, n_starts=n_starts, **kw)
+    dt = time.perf_counter() - t0
+    runs = values.size * n_starts
+    projected = dt / values.size * grid.size * (64 / n_starts)
+    log(f"   census: {values.size} values x {n_starts} starts in {dt:.1f} s "
+        f"({1e3 * dt / runs:.1f} ms per start); 200 x 64 projected {projected:.0f} s "
+        f"against the {fixed_values}-value fixed sweep's {fixed_s:.1f} s")  # fmt: skip
+    return dict(
+        values=int(values.size),
+        n_starts=int(n_starts),
+        seconds=dt,
+        ms_per_start=1e3 * dt / runs,
+        runs_without_attractor=int(np.count_nonzero(res.labels < 0)),
+        projected_200x64_s=projected,
+        fixed_sweep_s=fixed_s,
+        fixed_sweep_values=int(fixed_values),
+        ratio_to_fixed_sweep=projected / fixed_s,
+        target="a 64-start census of 200 values costs no more than the 1000-value fixed sweep",
     )

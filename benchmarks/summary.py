@@ -100,6 +100,23 @@ def write_summary(r):
             )
         else:
             L.append(f"| peak RSS of file-backed sweeps | {me['status']} | flat | pending |")
+    cs = sec.get("converged_stopping")
+    if cs:
+        L.append(
+            f"| converged stopping, Fig. 6 {cs['n_values']} values: fixed / converged "
+            f"| {cs['best_fixed']:.1f} s / {cs['best_converged']:.1f} s = {cs['speedup']:.1f}x "
+            f"({cs['agree_status_period']}/{cs['n_values']} same status and period) | >= 5x "
+            f"| {_verdict(cs['speedup'], 5.0)} |"
+        )
+        c = cs.get("census")
+        if c:
+            L.append(
+                f"| census, 64 starts x 200 values (projected from {c['values']} x "
+                f"{c['n_starts']}: {c['ms_per_start']:.1f} ms per start) / fixed "
+                f"{c['fixed_sweep_values']}-value sweep | {c['projected_200x64_s']:.0f} s / "
+                f"{c['fixed_sweep_s']:.1f} s = {c['ratio_to_fixed_sweep']:.2f}x | <= 1x "
+                f"| {_verdict(c['ratio_to_fixed_sweep'], 1.0, higher_is_better=False)} |"
+            )
     L.append("")
     L += summary_peers.readme_rows(r)
 

@@ -61,7 +61,6 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
     ) from exc
 
 from numba import cuda, float64, int64, njit, types
-from numba.core.errors import NumbaPerformanceWarning
 
 from . import linalg, model, poincare
 from .params import P_ETA, P_ETAP, P_VB0, eta_prime
@@ -694,7 +693,8 @@ class _Launch:
         )
         blocks = max(1, (nv + threads_per_block - 1) // threads_per_block)
         with warnings.catch_warnings():  # small launches are fine: no occupancy warning
-            warnings.simplefilter("ignore", NumbaPerformanceWarning)
+            # (numba-cuda raises its own copy of NumbaPerformanceWarning: match the text)
+            warnings.filterwarnings("ignore", message=r"(?s).*Grid size \d+ will likely")
             self._launch(kernel, blocks, threads_per_block, s, d_y0, d_params, settings,
                          t_transient, max_period, converged)  # fmt: skip
         self.sim = simulator_enabled()  # the simulator runs launches synchronously
