@@ -226,6 +226,28 @@ def test_falls_back_to_cpu_with_a_warning():
         np.testing.assert_array_equal(gpu.status, cpu.status)
 
 
+def test_nothing_else_imports_cuda():
+    # the package, its sweep/census/CLI modules and the analyses never import
+    # numba's CUDA target or the package's CUDA modules
+    code = textwrap.dedent(
+        """
+        import sys
+        import stickslip_fast, stickslip_fast.sweep, stickslip_fast.census, stickslip_fast.cli
+        import stickslip_fast.orbits, stickslip_fast.continuation, stickslip_fast.backends
+        cuda = ("numba.cuda", "numba_cuda", "stickslip_fast.cuda")
+        print(sorted(m for m in sys.modules if m.startswith(cuda)))
+        """
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+    res = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.strip() == "[]", res.stdout
+
+
 def test_kernel_sizes_are_checked():
     with pytest.raises(ValueError, match="n_osc"):
         cuda_backend.get_kernel(5, False)
