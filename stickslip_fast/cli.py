@@ -1,4 +1,4 @@
-"""Command line: ``stickslip-fast simulate | sweep | census | info``.
+"""Command line: ``stickslip-fast simulate | sweep | census | continue | info``.
 
 A thin layer over the public API: it parses a TOML config (see
 :mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
@@ -216,6 +216,47 @@ def _cmd_census(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_continue(args: argparse.Namespace) -> int:
+    from .continuation import continue_orbit
+    from .orbits import find_orbit
+    from .simulate import simulate
+
+    cfg = _config_from_args(args)
+    if cfg.continuation is None:
+        raise ConfigError(
+            f"{cfg.source}: continuation needs a [continue] section with param and bounds"
+        )
+    _check_writable(args.output, "-o")
+    c = dict(cfg.continuation)
+    param, bounds = c.pop("param"), c.pop("bounds")
+    period = c.pop("period", None)
+    say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    value = getattr(cfg.system, param)
+    say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
+    sim = simulate(cfg.system, y0=cfg.y0, **cfg.integration)
+    if sim.status != "ok" or sim.period < 1:
+        raise ValueError(
+            f"the simulation at {param} = {value:g} ended {sim.status!r} with period "
+            f"{sim.period}: no periodic orbit to continue; change [system].{param}, "
+            "[initial] or [integration].t_end"
+        )
+    orbit = find_orbit(cfg.system, sim, period)
+    if not orbit.converged:
+        raise ValueError(
+            f"Newton on the return map did not converge at {param} = {value:g} "
+            f"(status {orbit.status!r}: {orbit.message})"
+        )
+    lead = np.abs(orbit.multipliers).max() if orbit.multipliers.size else float("nan")
+    say(f"orbit: period {orbit.period}, T = {orbit.T:.10g}, residual {orbit.residual:.2g}, "
+        f"|leading multiplier| {lead:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
+    branch = continue_orbit(orbit, param, bounds, **c)
+    branch.to_hdf5(args.output)
+    if not args.quiet:
+        print(f"file:      {args.output}  (branch)")
+        print(branch.summary())
+    return 0
+
+
 def _census_report(path) -> str:
     """A text summary of a census file: configuration, progress, attractors per value."""
     import h5py
@@ -378,6 +419,14 @@ def _trajectory_report(path, h5) -> str:
 def _cmd_info(args: argparse.Namespace) -> int:
     from .io import file_kind
 
+    if file_kind(args.file) == "branch":
+        from .continuation import Branch
+
+        b = Branch.from_hdf5(args.file)
+        print(f"file:      {args.file}  (branch)")
+        print(f"system:    {' '.join(f'{k}={v}' for k, v in b.system.to_dict().items())}")
+        print(b.summary())
+        return 0
     if file_kind(args.file) == "census":
         print(_census_report(args.file))
         if args.json:
@@ -445,6 +494,15 @@ def build_parser() -> argparse.ArgumentParser:
         "cuda: one GPU thread per (value, start) (docs/gpu.md)",
     )
     p.set_defaults(func=_cmd_census)
+
+    p = sub.add_parser(
+        "continue",
+        help="follow a periodic orbit in one parameter into a branch file (docs/orbits.md)",
+    )
+    _add_common(p)
+    p.add_argument("-o", "--output", required=True, metavar="BRANCH.h5", help="HDF5 branch file")
+    p.add_argument("--quiet", action="store_true", help="no progress and no report")
+    p.set_defaults(func=_cmd_continue)
 
     p = sub.add_parser("info", help="summarise a result file")
     p.add_argument("file", metavar="OUT.h5")

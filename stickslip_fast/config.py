@@ -45,6 +45,13 @@ Layout (every section optional except what the command needs)::
     stop = "fixed"        # fixed | converged
     # identity_tol, track_threshold, chunk_size
 
+    [continue]            # stickslip-fast continue: follow a periodic orbit in one parameter
+    param = "eta"         # the orbit is found at the [system]'s value (simulated from [initial]
+    bounds = [1.5, 3.5]   #   with [integration], then Newton on the return map)
+    # period = 1          # default: the period the simulation finds
+    direction = 1         # 1: towards larger param first; -1: smaller
+    # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
+
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
 """
 
@@ -88,6 +95,9 @@ _SECTIONS = {
         "param", "values", "n_starts", "seed", "include_zero", "box", "starts", "stop",
         "chunk_size", "identity_tol", "track_threshold",
     },
+    "continue": {
+        "param", "bounds", "period", "direction", "ds", "ds_min", "ds_max", "max_points", "tol",
+    },
 }  # fmt: skip
 
 
@@ -105,6 +115,7 @@ class RunConfig:
     sample_dt: float | None = None
     sweep: dict[str, Any] | None = None
     census: dict[str, Any] | None = None
+    continuation: dict[str, Any] | None = None
     title: str = ""
     notes: str = ""
     source: str = ""
@@ -270,6 +281,7 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
             sweep["analyses"] = _analyses(sw["analyses"])
 
     census = _parse_census(data["census"]) if "census" in data else None
+    continuation = _parse_continue(data["continue"]) if "continue" in data else None
 
     title = data.get("title", "")
     notes = data.get("notes", "")
@@ -282,6 +294,7 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         sample_dt=None if sample_dt is None else float(sample_dt),
         sweep=sweep,
         census=census,
+        continuation=continuation,
         title=title,
         notes=notes,
         source=source,
@@ -330,6 +343,40 @@ def _parse_census(table: dict[str, Any]) -> dict[str, Any]:
                 raise ConfigError(
                     f"[census].{key} must be a list of lists of numbers: {exc}"
                 ) from None
+    return out
+
+
+def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
+    """Validate a ``[continue]`` table (types only; continue_orbit() checks the values)."""
+    if "param" not in table or "bounds" not in table:
+        raise ConfigError("[continue] needs 'param' and 'bounds'")
+    param = table["param"]
+    if not isinstance(param, str) or param not in SWEEPABLE:
+        raise ConfigError(f"[continue].param must be one of {list(SWEEPABLE)}, got {param!r}")
+    b = table["bounds"]
+    if (
+        not isinstance(b, list)
+        or len(b) != 2
+        or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in b)
+    ):
+        raise ConfigError(f"[continue].bounds must be a list of two numbers, got {b!r}")
+    out: dict[str, Any] = {"param": param, "bounds": (float(b[0]), float(b[1]))}
+    for key in ("period", "max_points"):
+        if key in table:
+            v = table[key]
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ConfigError(f"[continue].{key} must be an integer >= 1, got {v!r}")
+            out[key] = v
+    if "direction" in table:
+        if table["direction"] not in (1, -1) or isinstance(table["direction"], bool):
+            raise ConfigError(f"[continue].direction must be 1 or -1, got {table['direction']!r}")
+        out["direction"] = float(table["direction"])
+    for key in ("ds", "ds_min", "ds_max", "tol"):
+        if key in table:
+            v = table[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+                raise ConfigError(f"[continue].{key} must be a number > 0, got {v!r}")
+            out[key] = float(v)
     return out
 
 

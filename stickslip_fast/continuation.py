@@ -138,6 +138,71 @@ class Branch:
             raise
         return path
 
+    @classmethod
+    def from_hdf5(cls, path: str | Path) -> Branch:
+        """Read a branch file written by :meth:`to_hdf5`.
+
+        Raises
+        ------
+        ValueError
+            If the file is not a branch file of a known schema (naming what is wrong).
+        """
+        import h5py
+
+        from .system import System
+
+        with h5py.File(path, "r") as h5:
+            kind = h5.attrs.get("kind")
+            if kind != "branch":
+                raise ValueError(f"{path}: not a branch file (kind = {kind!r})")
+            version = int(h5.attrs.get("schema_version", -1))
+            if version != BRANCH_SCHEMA:
+                raise ValueError(
+                    f"{path}: branch schema_version {version}; this version reads {BRANCH_SCHEMA}"
+                )
+            kinds = [k.decode() if isinstance(k, bytes) else str(k)
+                     for k in h5["bifurcation_kind"][()]]  # fmt: skip
+            values = h5["values"][()]
+            points = h5["points"][()]
+            bifs = [
+                Bifurcation(kinds[j], float(h5["bifurcation_value"][j]),
+                            int(h5["bifurcation_index"][j]),
+                            points[min(int(h5["bifurcation_index"][j]), len(points) - 1)])
+                for j in range(len(kinds))
+            ]  # fmt: skip
+            return cls(
+                system=System.from_dict(json.loads(h5.attrs["system"])),
+                param=str(h5.attrs["param"]),
+                period=int(h5.attrs["period"]),
+                values=values,
+                points=points,
+                T=h5["T"][()],
+                multipliers=h5["multipliers_real"][()] + 1j * h5["multipliers_imag"][()],
+                stable=h5["stable"][()].astype(bool),
+                bifurcations=bifs,
+                status=str(h5.attrs["status"]),
+            )
+
+    def summary(self) -> str:
+        """A few lines: range, stability, bifurcations and why the branch ended."""
+        v = self.values
+        lines = [
+            f"branch:    period {self.period} in {self.param}, {v.size} points, "
+            f"{self.param} in [{v.min():.10g}, {v.max():.10g}], ended: {self.status}",
+            f"stability: {int(self.stable.sum())} stable, {int((~self.stable).sum())} unstable "
+            "points",
+        ]
+        if v.size:
+            lead = np.abs(self.multipliers).max(axis=1)
+            lines.append(f"|leading multiplier|: {lead.min():.4g} .. {lead.max():.4g}")
+        if self.bifurcations:
+            lines.append("bifurcations:")
+            lines += [f"  {b.label:<3} {b.kind:<16} {self.param} = {b.value:.10g}"
+                      for b in self.bifurcations]  # fmt: skip
+        else:
+            lines.append("bifurcations: none detected")
+        return "\n".join(lines)
+
 
 # ------------------------------------------------------------------ the core
 def _tangent(DG: np.ndarray, prev: np.ndarray) -> np.ndarray:

@@ -120,3 +120,53 @@ def test_branch_reaches_the_issue_value_at_eta_3_30(branch):
     o3 = ssf.find_orbit(o.system.replace(eta=3.30), br.points[-1], 1)
     assert o3.converged and o3.stable
     assert abs(o3.multipliers[0] - (-0.171)) < 1e-3
+
+
+def test_cli_continue_writes_the_api_branch_and_info_reads_it(branch, tmp_path, capsys):
+    from stickslip_fast.cli import main
+    from stickslip_fast.continuation import Branch
+
+    _, br = branch
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        '[system]\npreset = "asymmetric"\neta = 2.0\n'
+        '[integration]\nt_end = 20000.0\nstop = "converged"\n'
+        '[continue]\nparam = "eta"\nbounds = [1.9, 2.1]\nds = 0.02\nds_max = 0.05\n'
+        "max_points = 30\n"
+    )
+    out = tmp_path / "b.h5"
+    assert main(["continue", str(cfg), "-o", str(out)]) == 0
+    got = Branch.from_hdf5(out)
+    # the same orbit and branch as the API gives from the same simulation
+    np.testing.assert_array_equal(got.values, br.values)
+    np.testing.assert_array_equal(got.points, br.points)
+    np.testing.assert_array_equal(got.multipliers, br.multipliers)
+    assert got.period == 1 and got.status == br.status == "bounds" and got.param == "eta"
+    assert got.system == br.system and got.stable.all()
+    # the leading multiplier at eta = 2.0: -0.0969 by independent finite-difference shooting
+    assert abs(np.abs(got.multipliers[0]).max() - 0.0969) < 5e-4
+    text = capsys.readouterr().out
+    assert "period 1 in eta" in text and "bifurcations: none detected" in text
+    assert main(["info", str(out)]) == 0
+    assert "(branch)" in capsys.readouterr().out
+
+
+def test_cli_continue_errors_name_the_problem(tmp_path, capsys):
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[system]\npreset = "asymmetric"\neta = 2.0\n')
+    assert main(["continue", str(cfg), "-o", str(tmp_path / "b.h5")]) == 2
+    assert "[continue]" in capsys.readouterr().err
+    cfg.write_text('[continue]\nparam = "eta"\nbounds = [1.9]\n')
+    assert main(["continue", str(cfg), "-o", str(tmp_path / "b.h5")]) == 2
+    assert "[continue].bounds" in capsys.readouterr().err
+    # from rest at eta = 4.0 the zero state slides steadily: no orbit to continue
+    cfg.write_text(
+        '[system]\npreset = "asymmetric"\neta = 4.0\n[integration]\nt_end = 400.0\n'
+        'stop = "converged"\n[continue]\nparam = "eta"\nbounds = [3.5, 4.5]\n'
+    )
+    assert main(["continue", str(cfg), "-o", str(tmp_path / "b.h5")]) == 2
+    err = capsys.readouterr().err
+    assert "no periodic orbit" in err and "'equilibrium'" in err
+    assert not (tmp_path / "b.h5").exists()

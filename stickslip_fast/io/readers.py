@@ -73,13 +73,13 @@ def sweep_summary(path: str | Path) -> dict[str, Any]:
 
 
 def file_kind(path: str | Path) -> str:
-    """``"trajectory"`` (``simulate -o``), ``"census"`` (``census``), else ``"sweep"``."""
+    """``"trajectory"`` (``simulate -o``), ``"census"``, ``"branch"`` (``continue``), else ``"sweep"``."""
     with open_h5(path) as h5:
         try:
             kind = h5.attrs.get("kind")
         except (OSError, RuntimeError, KeyError):
             return "sweep"  # the sweep reader reports what is wrong
-    return kind if kind in ("trajectory", "census") else "sweep"
+    return kind if kind in ("trajectory", "census", "branch") else "sweep"
 
 
 def verify_sweep(path: str | Path) -> tuple[list[str], np.ndarray]:
