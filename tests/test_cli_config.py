@@ -85,6 +85,18 @@ def test_every_data_config_loads_and_matches_the_paper():
     np.testing.assert_array_equal(fig14.y0, [0, 0, 0, 0, 0.05, 0.05, 0, 0, 0])
 
 
+def test_census_and_continuation_configs_load():
+    census = sorted(glob.glob(os.path.join(ROOT, "data", "census", "*.toml")))
+    assert {os.path.basename(f)[:5] for f in census} == {"fig02", "fig06", "fig12", "fig16"}
+    for f in census:
+        cfg = load_config(f)
+        assert cfg.census["param"] == "eta" and cfg.census["n_starts"] == 64
+        assert cfg.census["values"].min() >= 1.0 and cfg.census["values"].max() <= 10.0
+    cont = load_config(os.path.join(ROOT, "data", "continuation", "fig06_p1.toml"))
+    c = cont.continuation
+    assert c["param"] == "eta" and c["bounds"][0] <= cont.system.eta <= c["bounds"][1]
+
+
 def test_cli_sweep_info_and_resume(tmp_path, capsys):
     cfg = _write(tmp_path, SMALL)
     out = tmp_path / "o.h5"
