@@ -230,8 +230,27 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     c = dict(cfg.continuation)
     param, bounds = c.pop("param"), c.pop("bounds")
     period = c.pop("period", None)
+    start = c.pop("start", "orbit")
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     value = getattr(cfg.system, param)
+    if start != "orbit":
+        from .continuation import continue_equilibrium
+        from .orbits import find_equilibrium
+
+        eq = find_equilibrium(cfg.system, start)
+        if not eq.converged:
+            raise ValueError(
+                f"no {start} equilibrium found at {param} = {value:g} (residual "
+                f"{eq.residual:.2g}); change [system] or [continue].start"
+            )
+        say(f"equilibrium ({eq.kind}): stable {eq.stable}, leading eigenvalue "
+            f"{eq.eigenvalues[0]:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
+        branch = continue_equilibrium(eq, param, bounds, **c)
+        branch.to_hdf5(args.output)
+        if not args.quiet:
+            print(f"file:      {args.output}  (branch)")
+            print(branch.summary())
+        return 0
     say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
     sim = simulate(cfg.system, y0=cfg.y0, **cfg.integration)
     if sim.status != "ok" or sim.period < 1:

@@ -45,9 +45,10 @@ Layout (every section optional except what the command needs)::
     stop = "fixed"        # fixed | converged
     # identity_tol, track_threshold, chunk_size
 
-    [continue]            # stickslip-fast continue: follow a periodic orbit in one parameter
+    [continue]            # stickslip-fast continue: follow an orbit or equilibrium in one parameter
     param = "eta"         # the orbit is found at the [system]'s value (simulated from [initial]
     bounds = [1.5, 3.5]   #   with [integration], then Newton on the return map)
+    start = "orbit"       # orbit | sliding | stall (equilibria: find_equilibrium, no simulation)
     # period = 1          # default: the period the simulation finds
     direction = 1         # 1: towards larger param first; -1: smaller
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
@@ -96,7 +97,8 @@ _SECTIONS = {
         "chunk_size", "identity_tol", "track_threshold",
     },
     "continue": {
-        "param", "bounds", "period", "direction", "ds", "ds_min", "ds_max", "max_points", "tol",
+        "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
+        "max_points", "tol",
     },
 }  # fmt: skip
 
@@ -361,6 +363,13 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
     ):
         raise ConfigError(f"[continue].bounds must be a list of two numbers, got {b!r}")
     out: dict[str, Any] = {"param": param, "bounds": (float(b[0]), float(b[1]))}
+    starts = ("orbit", "sliding", "stall")
+    if "start" in table:
+        if table["start"] not in starts:
+            raise ConfigError(f"[continue].start must be one of {starts}, got {table['start']!r}")
+        out["start"] = table["start"]
+    if "period" in table and out.get("start", "orbit") != "orbit":
+        raise ConfigError("[continue].period applies to start = 'orbit' only")
     for key in ("period", "max_points"):
         if key in table:
             v = table[key]

@@ -23,10 +23,18 @@ from typing import Any
 
 import numpy as np
 
-from .orbits import EQUILIBRIUM_SPEED, SECTION_INDEX, Orbit, _field, return_map
+from .model import dense_jacobian
+from .orbits import EQUILIBRIUM_SPEED, SECTION_INDEX, Equilibrium, Orbit, _field, return_map
 from .system import SWEEPABLE
 
-__all__ = ["Branch", "Bifurcation", "continue_orbit", "pseudo_arclength", "BRANCH_SCHEMA"]
+__all__ = [
+    "Branch",
+    "Bifurcation",
+    "continue_equilibrium",
+    "continue_orbit",
+    "pseudo_arclength",
+    "BRANCH_SCHEMA",
+]
 
 #: Version of the HDF5 layout written by :meth:`Branch.to_hdf5`.
 BRANCH_SCHEMA = 1
@@ -42,7 +50,9 @@ class Bifurcation:
 
     ``kind``: "fold", "period-doubling", "neimark-sacker", or "section-grazing" (the
     return map is discontinuous there: the period in time jumps because a crossing of
-    dx1 = 0 appears or vanishes; the branch of P^p ends). ``value``: the parameter;
+    dx1 = 0 appears or vanishes; the branch of P^p ends) on orbit branches; "fold" or
+    "hopf" (a complex pair of the Jacobian's eigenvalues crosses the imaginary axis) on
+    equilibrium branches. ``value``: the parameter;
     ``index``: the branch point just before it (for "section-grazing": the last point,
     within ``ds_min`` in arclength of the event); ``point``: the state there.
     """
@@ -55,12 +65,13 @@ class Bifurcation:
     @property
     def label(self) -> str:
         return {"fold": "F", "period-doubling": "PD", "neimark-sacker": "NS",
-                "section-grazing": "G"}[self.kind]  # fmt: skip
+                "section-grazing": "G", "hopf": "H"}[self.kind]  # fmt: skip
 
 
 @dataclass
 class Branch:
-    """A branch of periodic orbits from :func:`continue_orbit`.
+    """A branch of periodic orbits (:func:`continue_orbit`) or of equilibria
+    (:func:`continue_equilibrium`, ``period = 0``).
 
     Attributes
     ----------
@@ -69,20 +80,25 @@ class Branch:
     param : str
         The continued :class:`System` field.
     period : int
+        Crossings per period; 0 for a branch of equilibria.
     values : ndarray, shape (k,)
         The parameter at each point.
     points : ndarray, shape (k, n_state)
         The orbit's state on the section (dx1 = 0) at each point; the crossing
-        continued from the start orbit's ``points[0]``.
+        continued from the start orbit's ``points[0]``. For equilibria: the
+        equilibrium state.
     T : ndarray, shape (k,)
-        Period in time.
+        Period in time (NaN for equilibria).
     multipliers : ndarray of complex, shape (k, n_state - 1)
-        Floquet multipliers, largest modulus first.
+        Floquet multipliers, largest modulus first. For equilibria, shape
+        (k, n_state): the Jacobian's eigenvalues, largest real part first.
     stable : ndarray of bool, shape (k,)
+        All multipliers inside the unit circle; for equilibria, all eigenvalues
+        with a negative real part.
     bifurcations : list of Bifurcation
     status : str
-        Why the branch ended: "bounds" (the last point is the first one outside
-        them), "max-points", "step-too-small" (the corrector failed at ds_min)
+        Why the branch ended: "bounds" (the last point lies on one of them),
+        "max-points", "step-too-small" (the corrector failed at ds_min)
         or "nonsmooth" (a section grazing, recorded in ``bifurcations``).
     """
 
@@ -187,12 +203,16 @@ class Branch:
         """A few lines: range, stability, bifurcations and why the branch ended."""
         v = self.values
         lines = [
-            f"branch:    period {self.period} in {self.param}, {v.size} points, "
+            f"branch:    {'equilibria' if self.period == 0 else f'period {self.period}'} in "
+            f"{self.param}, {v.size} points, "
             f"{self.param} in [{v.min():.10g}, {v.max():.10g}], ended: {self.status}",
             f"stability: {int(self.stable.sum())} stable, {int((~self.stable).sum())} unstable "
             "points",
         ]
-        if v.size:
+        if v.size and self.period == 0:
+            lead = self.multipliers.real.max(axis=1)
+            lines.append(f"leading eigenvalue real part: {lead.min():.4g} .. {lead.max():.4g}")
+        elif v.size:
             lead = np.abs(self.multipliers).max(axis=1)
             lines.append(f"|leading multiplier|: {lead.min():.4g} .. {lead.max():.4g}")
         if self.bifurcations:
@@ -240,7 +260,7 @@ def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
 
 
 def _tests(A: np.ndarray, t: np.ndarray) -> dict[str, float]:
-    """Test functions whose sign changes mark the bifurcations."""
+    """Test functions whose sign changes mark the bifurcations of a map's fixed points."""
     mu = np.linalg.eigvals(A)
     cplx = mu[np.abs(mu.imag) > 1e-12 * np.maximum(1.0, np.abs(mu))]
     ns = math.nan  # |mu| - 1 of the complex pair nearest the unit circle
@@ -251,6 +271,23 @@ def _tests(A: np.ndarray, t: np.ndarray) -> dict[str, float]:
         "period-doubling": float(np.linalg.det(A + np.eye(A.shape[0]))),  # prod (mu + 1)
         "neimark-sacker": ns,
     }
+
+
+def _equilibrium_tests(J: np.ndarray, t: np.ndarray) -> dict[str, float]:
+    """Test functions of an ODE's equilibria: the fold (d lambda / ds), and the Hopf
+    point (the largest real part among complex eigenvalues of the Jacobian J: it
+    changes sign when the rightmost complex pair crosses the imaginary axis)."""
+    ev = np.linalg.eigvals(J)
+    cplx = ev[np.abs(ev.imag) > 1e-12 * np.maximum(1.0, np.abs(ev))]
+    return {
+        "fold": float(t[-1]),
+        "hopf": float(cplx.real.max()) if cplx.size else math.nan,
+    }
+
+
+def _eigs_by_real_part(J):
+    ev = np.linalg.eigvals(J).astype(complex)
+    return ev[np.argsort(-ev.real, kind="stable")]
 
 
 def pseudo_arclength(
@@ -267,6 +304,8 @@ def pseudo_arclength(
     locate_tol: float = 1e-9,
     max_corrector: int = 6,
     jump: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+    tests: Callable[[np.ndarray, np.ndarray], dict[str, float]] = _tests,
+    spectrum: Callable[[np.ndarray], np.ndarray] | None = None,
 ):
     """Follow G(x) = 0, x = (z, lambda), by pseudo-arclength continuation.
 
@@ -280,7 +319,8 @@ def pseudo_arclength(
     direction : float
         +1 to start towards increasing lambda, -1 towards decreasing.
     bounds : (float, float)
-        The branch ends when lambda leaves [lo, hi].
+        The branch ends on the first of them it reaches: a step that would
+        leave [lo, hi] is corrected with lambda fixed at the bound instead.
     ds, ds_min, ds_max : float
         First, smallest and largest arclength step. The step grows by 1.5
         after a corrector that needed <= 3 iterations, halves after a failure.
@@ -299,6 +339,12 @@ def pseudo_arclength(
         rejected and ds halved. When ds falls below ds_min and the last
         rejection was a jump, the branch ends with status "nonsmooth" within
         ds_min of the discontinuity; otherwise with "step-too-small".
+    tests : callable
+        (A, tangent) -> {kind: value}: test functions whose sign changes mark
+        bifurcations (default: those of a map's fixed points, fold /
+        period-doubling / Neimark-Sacker; equilibria use fold / Hopf).
+    spectrum : callable, optional
+        A -> the eigenvalues recorded per point (default: by modulus, largest first).
 
     Returns
     -------
@@ -316,8 +362,10 @@ def pseudo_arclength(
     guess[-1] = 1.0 if direction >= 0 else -1.0
     t = _tangent(DG, guess)
     xs = [x0.copy()]
-    mults = [_sorted_eigs(A)]
-    tests = [_tests(A, t)]
+    spectrum = spectrum or _sorted_eigs
+    test_fn = tests
+    mults = [spectrum(A)]
+    tests = [test_fn(A, t)]
     bifs: list[tuple[str, float, int, np.ndarray]] = []
     lo, hi = bounds
     status = "max-points"
@@ -325,8 +373,22 @@ def pseudo_arclength(
         x = xs[-1]
         accepted = False
         jumped = False
+        on_bound = False
         while ds >= ds_min:
             x_pred = x + ds * t
+            if not lo <= x_pred[-1] <= hi:
+                # the step leaves the interval: end on its bound (lambda fixed there)
+                edge = x_pred.copy()
+                edge[-1] = hi if x_pred[-1] > hi else lo
+                e_lam = np.zeros_like(x)
+                e_lam[-1] = 1.0
+                okc, x_new, data, its = _correct(evaluate, edge, e_lam, edge, tol, max_corrector)
+                if okc and not (jump is not None and jump(x, x_new)):
+                    on_bound = True
+                    accepted = True
+                    break
+                ds *= 0.5
+                continue
             okc, x_new, data, its = _correct(evaluate, x_pred, t, x_pred, tol, max_corrector)
             jumped = False
             if okc:
@@ -341,19 +403,19 @@ def pseudo_arclength(
             break
         G, DG, A = data
         t_new = _tangent(DG, t)
-        te = _tests(A, t_new)
+        te = test_fn(A, t_new)
         k = len(xs) - 1
         for kind, prev in tests[-1].items():
             cur = te[kind]
             if math.isfinite(prev) and math.isfinite(cur) and prev * cur < 0:
-                loc = _locate(evaluate, x, x_new, kind, prev, cur, t, tol, locate_tol)
+                loc = _locate(evaluate, x, x_new, kind, prev, cur, t, tol, locate_tol, test_fn)
                 if loc is not None:
                     bifs.append((kind, float(loc[-1]), k, loc))
         xs.append(x_new)
-        mults.append(_sorted_eigs(A))
+        mults.append(spectrum(A))
         tests.append(te)
         t = t_new
-        if not lo <= x_new[-1] <= hi:
+        if on_bound:
             status = "bounds"
             break
         if its <= 3:
@@ -366,7 +428,7 @@ def _sorted_eigs(A):
     return ev[np.argsort(-np.abs(ev), kind="stable")]
 
 
-def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol):
+def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol, test_fn=_tests):
     """Illinois secant in sigma in [0, 1] on the chord xa -> xb, correcting each point."""
     chord = xb - xa
     normal = chord / np.linalg.norm(chord)
@@ -383,7 +445,7 @@ def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol):
         if not okc:
             return x_best
         _, DG, A = data
-        f = _tests(A, _tangent(DG, t_a))[kind]
+        f = test_fn(A, _tangent(DG, t_a))[kind]
         x_best = x
         if abs(x[-1] - lam_prev) <= locate_tol or f == 0.0 or b - a < 1e-14:
             return x
@@ -402,6 +464,47 @@ def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol):
 
 
 # ------------------------------------------------------------------ orbits
+def _difference(value_at, lam: float, h: float, centre):
+    """d value / d lambda: central, or one-sided at the edge of the parameter's valid
+    range (value_at raises ValueError outside it, or returns None on failure)."""
+
+    def at(v):
+        try:
+            return value_at(v)
+        except ValueError:
+            return None
+
+    plus, minus = at(lam + h), at(lam - h)
+    if plus is not None and minus is not None:
+        return (plus - minus) / (2 * h)
+    if plus is not None and centre is not None:
+        return (plus - centre) / h
+    if minus is not None and centre is not None:
+        return (centre - minus) / h
+    return None
+
+
+def _check_args(system, what, param, bounds, ds, ds_min, ds_max, tol, max_points):
+    """The continuation arguments, checked; returns (start value, lo, hi)."""
+    if param not in SWEEPABLE or param == "n_oscillators":
+        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
+    try:
+        lo, hi = (float(v) for v in bounds)
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds must be two numbers (lo, hi), got {bounds!r}") from None
+    lam0 = float(getattr(system, param))
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= lam0 <= hi):
+        raise ValueError(f"bounds {bounds!r} must contain the {what}'s {param} = {lam0}")
+    for name, v in (("ds", ds), ("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+    if not ds_min <= ds <= ds_max:
+        raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
+    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
+        raise ValueError(f"max_points must be an integer >= 2, got {max_points!r}")
+    return lam0, lo, hi
+
+
 def continue_orbit(
     orbit: Orbit,
     param: str,
@@ -440,7 +543,8 @@ def continue_orbit(
         Integration tolerances of the return map.
     fd_step : float
         Relative step of the central difference dP/dlambda (the variational
-        equations give the Jacobian in z only).
+        equations give the Jacobian in z only; one-sided at the edge of the
+        parameter's valid range).
 
     Returns
     -------
@@ -454,22 +558,8 @@ def continue_orbit(
     """
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
-    if param not in SWEEPABLE or param == "n_oscillators":
-        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
-    try:
-        lo, hi = (float(v) for v in bounds)
-    except (TypeError, ValueError):
-        raise ValueError(f"bounds must be two numbers (lo, hi), got {bounds!r}") from None
-    lam0 = float(getattr(orbit.system, param))
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= lam0 <= hi):
-        raise ValueError(f"bounds {bounds!r} must contain the orbit's {param} = {lam0}")
-    for name, v in (("ds", ds), ("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
-    if not ds_min <= ds <= ds_max:
-        raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
-    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
-        raise ValueError(f"max_points must be an integer >= 2, got {max_points!r}")
+    lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
+                               max_points)  # fmt: skip
     system0 = orbit.system
     p = orbit.period
     n = system0.n_state
@@ -501,16 +591,15 @@ def continue_orbit(
         if st != "ok":
             return False, None, None, None
         h = fd_step * max(1.0, abs(lam))
-        try:
-            s_p, s_m = system_at(lam + h), system_at(lam - h)
-        except ValueError:
-            return False, None, None, None
-        st_p, pp, _, _ = return_map(s_p, z, p, tangents=False, **kw)
-        st_m, pm, _, _ = return_map(s_m, z, p, tangents=False, **kw)
-        if st_p != "ok" or st_m != "ok":
+
+        def image(v):
+            st_v, pv, _, _ = return_map(system_at(v), z, p, tangents=False, **kw)
+            return pv[-1][mask] if st_v == "ok" else None
+
+        dlam = _difference(image, lam, h, pts[-1][mask])
+        if dlam is None:
             return False, None, None, None
         G = pts[-1][mask] - x[:-1]
-        dlam = (pp[-1][mask] - pm[-1][mask]) / (2 * h)
         DG = np.hstack([jac - np.eye(n - 1), dlam[:, None]])
         out = (True, G, DG, jac)
         periods[key] = float(times[-1])
@@ -554,5 +643,98 @@ def continue_orbit(
         multipliers=mults,
         stable=np.all(np.abs(mults) < 1.0, axis=1),
         bifurcations=[Bifurcation(k, v, i, full(x)) for k, v, i, x in bifs],
+        status=status,
+    )
+
+
+# ------------------------------------------------------------------ equilibria
+def continue_equilibrium(
+    equilibrium: Equilibrium,
+    param: str,
+    bounds: tuple[float, float],
+    *,
+    ds: float = 0.01,
+    ds_min: float = 1e-8,
+    ds_max: float = 0.05,
+    max_points: int = 200,
+    direction: float = 1.0,
+    tol: float = 1e-12,
+    fd_step: float = 1e-7,
+) -> Branch:
+    """Continue an equilibrium (steady sliding, the stalled motor) in one parameter.
+
+    Pseudo-arclength continuation of f(y; lambda) = 0 with the analytic
+    Jacobian in y (:func:`stickslip_fast.model.dense_jacobian`) and a central
+    difference in lambda. Along the branch it records the Jacobian's
+    eigenvalues and the stability, and locates (to ~1e-9 in the parameter)
+    folds (lambda turns back: an eigenvalue through 0) and Hopf points (a
+    complex pair crosses the imaginary axis: the rightmost complex pair's
+    real part changes sign).
+
+    Parameters
+    ----------
+    equilibrium : Equilibrium
+        A converged equilibrium from :func:`find_equilibrium`.
+    param, bounds, ds, ds_min, ds_max, max_points, direction
+        As for :func:`continue_orbit` (arclength in the full state and the parameter).
+    tol : float
+        Corrector tolerance on max |f(y)|.
+    fd_step : float
+        Relative step of the central difference df/dlambda (one-sided at the
+        edge of the parameter's valid range, e.g. eta = 1 or 10).
+
+    Returns
+    -------
+    Branch
+        With ``period = 0``, ``T`` NaN, ``multipliers`` the eigenvalues
+        (largest real part first), and bifurcations of kinds "fold" and "hopf".
+
+    Raises
+    ------
+    ValueError
+        For an unconverged equilibrium, an unknown ``param``, bounds that do
+        not contain the start, or non-positive step sizes (naming the argument).
+    """
+    if not isinstance(equilibrium, Equilibrium) or not equilibrium.converged:
+        raise ValueError("equilibrium must be a converged Equilibrium from find_equilibrium")
+    system0 = equilibrium.system
+    lam0, lo, hi = _check_args(system0, "equilibrium", param, bounds, ds, ds_min, ds_max, tol,
+                               max_points)  # fmt: skip
+    nosc, dc = system0.n_oscillators, system0.is_dc_motor
+
+    def system_at(lam):
+        return dataclasses.replace(system0, **{param: float(lam)})
+
+    def evaluate(x):
+        y, lam = x[:-1], float(x[-1])
+        try:
+            s = system_at(lam)
+        except ValueError:  # outside the parameter's valid range
+            return False, None, None, None
+        G = _field(s, y)
+        J = dense_jacobian(y, s.to_array(), nosc, dc)
+        dlam = _difference(lambda v: _field(system_at(v), y), lam,
+                           fd_step * max(1.0, abs(lam)), G)  # fmt: skip
+        if dlam is None or not (
+            np.all(np.isfinite(G)) and np.all(np.isfinite(J)) and np.all(np.isfinite(dlam))
+        ):
+            return False, None, None, None
+        return True, G, np.hstack([J, dlam[:, None]]), J
+
+    x0 = np.r_[equilibrium.state, lam0]
+    xs, eigs, bifs, status = pseudo_arclength(
+        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
+        max_points=max_points, tol=tol, tests=_equilibrium_tests, spectrum=_eigs_by_real_part,
+    )  # fmt: skip
+    return Branch(
+        system=system0,
+        param=param,
+        period=0,
+        values=xs[:, -1].copy(),
+        points=xs[:, :-1].copy(),
+        T=np.full(len(xs), np.nan),
+        multipliers=eigs,
+        stable=np.all(eigs.real < 0.0, axis=1),
+        bifurcations=[Bifurcation(k, v, i, x[:-1].copy()) for k, v, i, x in bifs],
         status=status,
     )

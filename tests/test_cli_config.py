@@ -92,9 +92,12 @@ def test_census_and_continuation_configs_load():
         cfg = load_config(f)
         assert cfg.census["param"] == "eta" and cfg.census["n_starts"] == 64
         assert cfg.census["values"].min() >= 1.0 and cfg.census["values"].max() <= 10.0
-    cont = load_config(os.path.join(ROOT, "data", "continuation", "fig06_p1.toml"))
-    c = cont.continuation
-    assert c["param"] == "eta" and c["bounds"][0] <= cont.system.eta <= c["bounds"][1]
+    conts = sorted(glob.glob(os.path.join(ROOT, "data", "continuation", "*.toml")))
+    assert len(conts) >= 2
+    for f in conts:
+        cont = load_config(f)
+        c = cont.continuation
+        assert c["bounds"][0] <= getattr(cont.system, c["param"]) <= c["bounds"][1]
 
 
 def test_cli_sweep_info_and_resume(tmp_path, capsys):
