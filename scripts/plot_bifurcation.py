@@ -4,6 +4,7 @@ Usage::
 
     python scripts/plot_bifurcation.py OUT.h5 -o fig.png [--vars x1,phi1] [--period]
     python scripts/plot_bifurcation.py CENSUS.h5 -o census.png [--vars x1,phi1]
+    python scripts/plot_bifurcation.py OUT.h5 -o fig.png --branch B1.h5 --branch B2.h5 [--multipliers]
 
 Reads only the HDF5 file written by :func:`stickslip_fast.sweep` or
 :func:`stickslip_fast.census` (it simulates nothing).
@@ -24,6 +25,17 @@ final state, failures as ticks on the lower edge. ``--period`` adds a panel with
 the detected period, and a file holding a ``sync_error`` dataset gets a panel
 for it. 2-D sweeps: a period map (``pcolormesh``) coloured by period, with
 "no period", equilibrium, stalled and failed values in distinct colours.
+
+Branch files (``stickslip-fast continue``, :meth:`Branch.to_hdf5`) are drawn over a
+1-D sweep or a census with ``--branch`` (repeatable): the continued section point
+against the parameter, black for orbits and grey for equilibria, solid where
+stable and dashed where unstable, with each located bifurcation marked and
+labelled (F fold, PD period-doubling, NS Neimark-Sacker, H Hopf, G section
+grazing). Only the orbit's first section point is continued, so a period-p
+branch is one curve through one of its p points. ``--multipliers`` adds a
+panel with the largest |Floquet multiplier| of every orbit branch (1 marks the
+stability boundary) and the largest real part of the eigenvalues of every
+equilibrium branch (0 marks it).
 
 The output format follows the extension (.png, .pdf, .svg).
 """
@@ -52,7 +64,9 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from stickslip_fast.io import read_sweep  # noqa: E402
 from stickslip_fast.poincare import STATUS_NAMES  # noqa: E402
 
-__all__ = ["plot_sweep", "plot_bifurcation", "plot_period_map", "plot_census", "main"]
+__all__ = [
+    "plot_sweep", "plot_bifurcation", "plot_period_map", "plot_census", "overlay_branches", "main",
+]  # fmt: skip
 
 LABELS = {
     "x": "$x$",
@@ -417,6 +431,8 @@ def plot_sweep(
     period_panel: bool = False,
     title: str | None = None,
     dpi: int = 150,
+    branches: Sequence[str | Path] = (),
+    multiplier_panel: bool = False,
 ) -> Path:
     """Read a sweep file and write its figure to ``out`` (format from the extension).
 
@@ -433,6 +449,10 @@ def plot_sweep(
     title : str, optional
     dpi : int
         Resolution of raster output.
+    branches : sequence of path
+        Branch files to overlay (1-D sweeps and censuses; see :func:`overlay_branches`).
+    multiplier_panel : bool
+        With branches: add the panel of their leading multipliers.
 
     Returns
     -------
@@ -440,6 +460,10 @@ def plot_sweep(
         ``out``.
     """
     import h5py
+
+    from stickslip_fast.continuation import Branch
+
+    loaded = [Branch.from_hdf5(b) for b in branches]
 
     with h5py.File(path, "r", libver="latest", swmr=True) as h5:
         kind = h5.attrs.get("kind")
@@ -449,6 +473,9 @@ def plot_sweep(
 
         res = load_census(path)
         fig = plot_census(res, variables, title=title if title is not None else file_title or None)
+        if loaded:
+            overlay_branches(fig, loaded, res.param, res.state_names, variables,
+                             multiplier_panel=multiplier_panel)  # fmt: skip
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(out, dpi=dpi)
@@ -457,14 +484,128 @@ def plot_sweep(
     data = read_sweep(path)
     data["path"] = str(path)
     if len(data["param"]) == 2:
+        if loaded:
+            raise ValueError("branches go on 1-D sweeps and censuses, not on a 2-D period map")
         fig = plot_period_map(data, title=title)
     else:
         fig = plot_bifurcation(data, variables, period_panel=period_panel, title=title)
+        if loaded:
+            overlay_branches(fig, loaded, data["param"][0], data["state_names"], variables,
+                             multiplier_panel=multiplier_panel)  # fmt: skip
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of the runs of equal values of ``mask``, overlapping by one point."""
+    out, a = [], 0
+    for i in range(1, mask.size + 1):
+        if i == mask.size or mask[i] != mask[a]:
+            out.append((a, min(i + 1, mask.size)))
+            a = i
+    return out
+
+
+def overlay_branches(
+    fig: plt.Figure,
+    branches: Sequence[Any],
+    param: str,
+    state_names: Sequence[str],
+    variables: Sequence[str] | None = None,
+    *,
+    multiplier_panel: bool = False,
+) -> plt.Figure:
+    """Draw continuation branches over a bifurcation or census figure.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        From :func:`plot_bifurcation` or :func:`plot_census`: its first axes are
+        the variable panels (one per kind of variable, in the order of ``variables``).
+    branches : sequence of Branch
+        :class:`stickslip_fast.continuation.Branch`, e.g. from ``Branch.from_hdf5``.
+    param : str
+        The figure's parameter; every branch must be continued in it.
+    state_names : sequence of str
+        The figure's state names; every branch's system must have the same.
+    variables : sequence of str, optional
+        As given to the figure (default x_i and phi_i).
+    multiplier_panel : bool
+        Append a panel of the largest |multiplier| (orbits) and the largest
+        eigenvalue real part (equilibria) against the parameter.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``.
+
+    Raises
+    ------
+    ValueError
+        A branch in another parameter, or of a system with other state variables.
+    """
+    names = list(state_names)
+    variables = list(variables) if variables else _default_vars(names)
+    kinds: list[str] = []
+    for v in variables:
+        if _split(v)[0] not in kinds:
+            kinds.append(_split(v)[0])
+    axs = fig.axes[: len(kinds)]
+    for b in branches:
+        if b.param != param:
+            raise ValueError(
+                f"a branch continued in {b.param!r} cannot go on a figure of {param!r}"
+            )
+        if b.points.shape[1] != len(names):
+            raise ValueError(
+                f"a branch of {b.points.shape[1]} state variables cannot go on a figure of "
+                f"{len(names)} ({', '.join(names)})"
+            )
+    for v in variables:
+        ax = axs[kinds.index(_split(v)[0])]
+        col = names.index(v)
+        for b in branches:
+            colour = "0.35" if b.period == 0 else "black"
+            for a, z in _runs(np.asarray(b.stable, dtype=bool)):
+                ax.plot(b.values[a:z], b.points[a:z, col], color=colour, lw=1.3,
+                        ls="-" if b.stable[a] else "--", zorder=5)  # fmt: skip
+            for bif in b.bifurcations:
+                ax.plot([bif.value], [bif.point[col]], marker="o", ms=5, mfc="white",
+                        mec="crimson", mew=1.5, zorder=6)  # fmt: skip
+                ax.annotate(bif.label, (bif.value, bif.point[col]), xytext=(3, 4),
+                            textcoords="offset points", fontsize=7, color="crimson", zorder=6)  # fmt: skip
+    mine = [Line2D([], [], color="black", lw=1.3, label="branch, stable"),
+            Line2D([], [], color="black", lw=1.3, ls="--", label="branch, unstable")]  # fmt: skip
+    leg = axs[0].get_legend()
+    if leg is None:
+        axs[0].legend(handles=mine, fontsize=6.5, loc="lower right", framealpha=0.8)
+    else:  # the figure's own legend stays: the branch entries go in a second one
+        axs[0].add_artist(leg)
+        axs[0].legend(handles=mine, fontsize=6.5, loc="lower right", framealpha=0.8)
+    if multiplier_panel:
+        old = fig.axes
+        heights = [ax.get_position().height for ax in old]
+        gs = fig.add_gridspec(len(old) + 1, 1, height_ratios=heights + [0.35 * max(heights)])
+        for i, ax in enumerate(old):
+            ax.set_subplotspec(gs[i])
+        mx = fig.add_subplot(gs[-1], sharex=old[0])
+        for b in branches:
+            if b.period == 0:
+                y, colour = b.multipliers.real.max(axis=1), "0.35"
+            else:
+                y, colour = np.abs(b.multipliers).max(axis=1), "black"
+            mx.plot(b.values, y, color=colour, lw=1.0)
+        mx.axhline(1.0, color="crimson", lw=0.8, ls=":")
+        mx.axhline(0.0, color="0.5", lw=0.8, ls=":")
+        mx.set_ylabel(r"max $|\mu|$ / max Re $\lambda$", fontsize=8)
+        mx.set_xlabel(old[-1].get_xlabel())
+        old[-1].set_xlabel("")
+        old[-1].tick_params(labelbottom=False)
+        fig.tight_layout()
+    return fig
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -476,10 +617,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--period", action="store_true", help="add a period panel")
     p.add_argument("--title", help="figure title (default: the file's title)")
     p.add_argument("--dpi", type=int, default=150)
+    p.add_argument("--branch", action="append", default=[], metavar="BRANCH.h5",
+                   help="overlay a branch file (stickslip-fast continue); repeatable")  # fmt: skip
+    p.add_argument("--multipliers", action="store_true",
+                   help="with --branch: add a panel of the branches' leading multipliers")  # fmt: skip
     args = p.parse_args(argv)
     variables = [v.strip() for v in args.vars.split(",")] if args.vars else None
     out = plot_sweep(args.file, args.output, variables, period_panel=args.period,
-                     title=args.title, dpi=args.dpi)  # fmt: skip
+                     title=args.title, dpi=args.dpi, branches=args.branch,
+                     multiplier_panel=args.multipliers)  # fmt: skip
     print(f"wrote {out}")
     return 0
 

@@ -7,7 +7,7 @@ records Poincare points at the local minima of x_1.
 
 Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`,
 :func:`census`; periodic orbits and their multipliers: :func:`find_orbit`,
-:func:`find_equilibrium`, :func:`continue_orbit` (docs/orbits.md).
+:func:`find_equilibrium`, :func:`continue_orbit`, :func:`continue_equilibrium` (docs/orbits.md).
 """
 
 from __future__ import annotations

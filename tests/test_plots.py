@@ -187,3 +187,73 @@ def test_make_figures_quick_makes_one_file_per_figure(tmp_path):
     used = {c for f in make_figures.FIGURES for c in f.configs}
     assert used == {p for p in os.listdir(os.path.join(ROOT, "data")) if p.startswith("fig")}
     load_config(os.path.join(ROOT, "data", sorted(used)[0]))
+
+
+def _fake_branch(system, period, values, stable, bifurcations=()):
+    from stickslip_fast.continuation import Bifurcation, Branch
+
+    n = system.n_state
+    pts = np.zeros((values.size, n))
+    pts[:, 0] = 0.05 + 0.01 * values  # x1 on the branch
+    m = n if period == 0 else n - 1
+    mult = np.full((values.size, m), 0.5 + 0j)
+    mult[~stable, 0] = 1.5
+    bifs = [Bifurcation(k, v, int(np.searchsorted(values, v)) - 1, np.r_[0.05 + 0.01 * v,
+                                                                      np.zeros(n - 1)])
+            for k, v in bifurcations]  # fmt: skip
+    return Branch(system, "eta", period, values, pts, np.full(values.size, 6.0), mult, stable,
+                  bifs, "bounds")  # fmt: skip
+
+
+def test_branches_overlay_sweeps_and_censuses(tmp_path):
+    from stickslip_fast.continuation import Branch
+
+    sweep_file = tmp_path / "one.h5"
+    ssf.sweep(ASYM, "eta", np.linspace(1.0, 10.0, 6), out=sweep_file, **KW)
+    values = np.linspace(2.0, 3.0, 5)
+    stable = np.array([True, True, True, False, False])
+    orbit = _fake_branch(ASYM, 1, values, stable, [("fold", 2.6)])
+    orbit_file = orbit.to_hdf5(tmp_path / "orbit.h5")
+    eq_file = _fake_branch(ASYM, 0, values, np.ones(5, bool)).to_hdf5(tmp_path / "eq.h5")
+    back = Branch.from_hdf5(orbit_file)
+    assert back.bifurcations[0].kind == "fold" and back.bifurcations[0].value == 2.6
+    png = tmp_path / "over.png"
+    args = [str(sweep_file), "-o", str(png), "--branch", str(orbit_file), "--branch",
+            str(eq_file), "--multipliers", "--period"]  # fmt: skip
+    assert plot_bifurcation.main(args) == 0
+    _check_png(png)
+    # what is drawn: the stable run solid, the unstable run (from the last stable point) dashed
+    data = plot_bifurcation.read_sweep(sweep_file)
+    fig = plot_bifurcation.plot_bifurcation(data, ["x1"])
+    plot_bifurcation.overlay_branches(fig, [orbit], "eta", data["state_names"], ["x1"],
+                                      multiplier_panel=True)  # fmt: skip
+    lines = [ln for ln in fig.axes[0].lines if ln.get_zorder() == 5]
+    assert [ln.get_linestyle() for ln in lines] == ["-", "--"]
+    np.testing.assert_array_equal(lines[0].get_xdata(), values[:4])
+    np.testing.assert_array_equal(lines[1].get_xdata(), values[3:])
+    assert [t.get_text() for t in fig.axes[0].texts] == ["F"]
+    assert len(fig.axes) == 2  # the variable panel and the multiplier panel
+    np.testing.assert_allclose(fig.axes[1].lines[0].get_ydata(), [0.5, 0.5, 0.5, 1.5, 1.5])
+    plot_bifurcation.plt.close(fig)
+    # on a census file too
+    census_file = tmp_path / "census.h5"
+    ssf.census(ASYM, "eta", [2.0, 4.0], n_starts=2, t_end=60.0, max_points=16, out=census_file,
+               progress=False)  # fmt: skip
+    png = tmp_path / "census.png"
+    assert plot_bifurcation.main([str(census_file), "-o", str(png), "--branch",
+                                  str(orbit_file)]) == 0  # fmt: skip
+    _check_png(png)
+    # refused: another parameter, another system, a 2-D map
+    other = _fake_branch(ASYM, 1, values, stable)
+    other.param = "k12"
+    with pytest.raises(ValueError, match="continued in 'k12'"):
+        plot_bifurcation.plot_sweep(sweep_file, tmp_path / "x.png",
+                                    branches=[other.to_hdf5(tmp_path / "k.h5")])  # fmt: skip
+    two = _fake_branch(TWO, 1, values, stable).to_hdf5(tmp_path / "two.h5")
+    with pytest.raises(ValueError, match="state variables"):
+        plot_bifurcation.plot_sweep(sweep_file, tmp_path / "x.png", branches=[two])
+    map_file = tmp_path / "map.h5"
+    ssf.sweep(ASYM, ("eta", "k12"), (np.linspace(1, 10, 2), np.linspace(-0.8, 0.0, 2)),
+              out=map_file, **KW)  # fmt: skip
+    with pytest.raises(ValueError, match="2-D"):
+        plot_bifurcation.plot_sweep(map_file, tmp_path / "x.png", branches=[orbit_file])
