@@ -6,6 +6,13 @@ Poincare map with the variational Jacobian, rtol 1e-11), and of ``ssf.simulate``
 periods from the same state at the same tolerances. Reports the Newton solve in "periods'
 worth" of simulation (target: at most 20). Kernels are compiled by a warm-up call first; each
 time is the minimum over ``--repeat`` runs. Prints one JSON line per case.
+
+``--branch``: the full-branch cost (issue 10, sec. 6), side by side in one run: the period-1
+orbit of Fig. 6 continued from eta = 2.0 in both directions over [1, 10] (``continue_orbit``,
+ds 0.02, ds_max 0.05: it ends where the corrector stops at the branch's sharp ends), steady
+sliding over [1, 10] (``continue_equilibrium``), and the 1000-value fixed-window Fig. 6 sweep
+on all cores (t_end 3000 / t_transient 2000). One run each (the sweep and the branch are
+minutes, not milliseconds).
 """
 
 from __future__ import annotations
@@ -35,10 +42,49 @@ def _best(fn, repeat):
     return best, out
 
 
+def branch_cost() -> dict:
+    """Seconds for the Fig. 6 period-1 branch and sliding branch against the 1000-value sweep."""
+    import numpy as np
+
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, ssf.simulate(s, 3000.0, stop="converged"))
+    ssf.continue_orbit(orbit, "eta", (1.9, 2.1), max_points=3)  # warm-up
+    out: dict = {}
+    t0 = time.perf_counter()
+    pts = 0
+    for d in (-1.0, 1.0):
+        b = ssf.continue_orbit(orbit, "eta", (1.0, 10.0), ds=0.02, ds_max=0.05, direction=d)
+        pts += b.values.size
+        out[f"p1_{'down' if d < 0 else 'up'}"] = dict(
+            points=int(b.values.size), end=float(b.values[-1]), status=b.status
+        )
+    out["p1_branch_s"] = time.perf_counter() - t0
+    out["p1_points"] = pts
+    t0 = time.perf_counter()
+    e = ssf.find_equilibrium(s, "sliding")
+    for d in (-1.0, 1.0):
+        ssf.continue_equilibrium(e, "eta", (1.0, 10.0), ds=0.1, ds_max=0.5, direction=d)
+    out["sliding_branch_s"] = time.perf_counter() - t0
+    ssf.sweep(ssf.System.preset("asymmetric"), "eta", np.array([2.0]), t_end=10.0, progress=False)
+    t0 = time.perf_counter()
+    ssf.sweep(ssf.System.preset("asymmetric"), "eta", np.linspace(1.0, 10.0, 1000), t_end=3000.0,
+              t_transient=2000.0, max_points=256, progress=False)  # fmt: skip
+    out["fig6_sweep_1000_s"] = time.perf_counter() - t0
+    out["branch_over_sweep"] = out["p1_branch_s"] / out["fig6_sweep_1000_s"]
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--branch", action="store_true", help="also the full-branch cost")
     args = ap.parse_args()
+    if args.branch:
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # the sweep's equilibria
+            print(json.dumps(dict(case="full branch vs 1000-value sweep", **branch_cost())))
     for name, eta in CASES:
         s = ssf.System.preset("asymmetric", eta=eta)
         r = ssf.simulate(s, 20000, stop="converged")
