@@ -598,6 +598,12 @@ def overlay_branches(
             else:
                 y, colour = np.abs(b.multipliers).max(axis=1), "black"
             mx.plot(b.values, y, color=colour, lw=1.0)
+        top = max((float(np.nanmax(ln.get_ydata())) for ln in mx.lines), default=1.0)
+        bottom = min((float(np.nanmin(ln.get_ydata())) for ln in mx.lines), default=0.0)
+        if top > 2.5:  # a multiplier racing off near a branch end would hide the rest
+            mx.set_ylim(min(-0.1, bottom) - 0.1, 2.5)
+            mx.text(0.99, 0.95, f"clipped at 2.5 (max {top:.3g})", transform=mx.transAxes,
+                    ha="right", va="top", fontsize=6.5, color="0.3")  # fmt: skip
         mx.axhline(1.0, color="crimson", lw=0.8, ls=":")
         mx.axhline(0.0, color="0.5", lw=0.8, ls=":")
         mx.set_ylabel(r"max $|\mu|$ / max Re $\lambda$", fontsize=8)
