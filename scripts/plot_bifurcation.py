@@ -581,10 +581,15 @@ def overlay_branches(
             Line2D([], [], color="black", lw=1.3, ls="--", label="branch, unstable")]  # fmt: skip
     leg = axs[0].get_legend()
     if leg is None:
-        axs[0].legend(handles=mine, fontsize=6.5, loc="lower right", framealpha=0.8)
-    else:  # the figure's own legend stays: the branch entries go in a second one
+        axs[0].legend(handles=mine, fontsize=6.5, loc="best", framealpha=0.8)
+    elif leg.get_bbox_to_anchor().bounds == axs[0].bbox.bounds:
+        # the sweep's legend, inside the panel: one legend with the branch entries added
+        labels = [t.get_text() for t in leg.get_texts()] + [h.get_label() for h in mine]
+        axs[0].legend(handles=list(leg.legend_handles) + mine, labels=labels, fontsize=6.5,
+                      loc="best", framealpha=0.8)  # fmt: skip
+    else:  # the census's track legend, outside the panel, stays; the branch entries go inside
         axs[0].add_artist(leg)
-        axs[0].legend(handles=mine, fontsize=6.5, loc="lower right", framealpha=0.8)
+        axs[0].legend(handles=mine, fontsize=6.5, loc="best", framealpha=0.8)
     if multiplier_panel:
         old = fig.axes
         heights = [ax.get_position().height for ax in old]
