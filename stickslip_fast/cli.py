@@ -217,10 +217,6 @@ def _cmd_census(args: argparse.Namespace) -> int:
 
 
 def _cmd_continue(args: argparse.Namespace) -> int:
-    from .continuation import continue_orbit
-    from .orbits import find_orbit
-    from .simulate import simulate
-
     cfg = _config_from_args(args)
     if cfg.continuation is None:
         raise ConfigError(
@@ -229,28 +225,26 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     _check_writable(args.output, "-o")
     c = dict(cfg.continuation)
     param, bounds = c.pop("param"), c.pop("bounds")
-    period = c.pop("period", None)
     start = c.pop("start", "orbit")
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
-    value = getattr(cfg.system, param)
-    if start != "orbit":
-        from .continuation import continue_equilibrium
-        from .orbits import find_equilibrium
+    if start == "orbit":
+        branch = _continue_orbit(cfg, param, bounds, c.pop("period", None), c, say)
+    else:
+        branch = _continue_equilibrium(cfg, param, bounds, start, c, say)
+    branch.to_hdf5(args.output)
+    if not args.quiet:
+        print(f"file:      {args.output}  (branch)")
+        print(branch.summary())
+    return 0
 
-        eq = find_equilibrium(cfg.system, start)
-        if not eq.converged:
-            raise ValueError(
-                f"no {start} equilibrium found at {param} = {value:g} (residual "
-                f"{eq.residual:.2g}); change [system] or [continue].start"
-            )
-        say(f"equilibrium ({eq.kind}): stable {eq.stable}, leading eigenvalue "
-            f"{eq.eigenvalues[0]:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
-        branch = continue_equilibrium(eq, param, bounds, **c)
-        branch.to_hdf5(args.output)
-        if not args.quiet:
-            print(f"file:      {args.output}  (branch)")
-            print(branch.summary())
-        return 0
+
+def _continue_orbit(cfg: RunConfig, param: str, bounds, period, options: dict, say):
+    """The orbit of the config's system (simulation, then Newton), continued."""
+    from .continuation import continue_orbit
+    from .orbits import find_orbit
+    from .simulate import simulate
+
+    value = getattr(cfg.system, param)
     say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
     sim = simulate(cfg.system, y0=cfg.y0, **cfg.integration)
     if sim.status != "ok" or sim.period < 1:
@@ -268,12 +262,23 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     lead = np.abs(orbit.multipliers).max() if orbit.multipliers.size else float("nan")
     say(f"orbit: period {orbit.period}, T = {orbit.T:.10g}, residual {orbit.residual:.2g}, "
         f"|leading multiplier| {lead:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
-    branch = continue_orbit(orbit, param, bounds, **c)
-    branch.to_hdf5(args.output)
-    if not args.quiet:
-        print(f"file:      {args.output}  (branch)")
-        print(branch.summary())
-    return 0
+    return continue_orbit(orbit, param, bounds, **options)
+
+
+def _continue_equilibrium(cfg: RunConfig, param: str, bounds, start: str, options: dict, say):
+    """The config's system's rest point (``start`` "sliding" or "stall"), continued."""
+    from .continuation import continue_equilibrium
+    from .orbits import find_equilibrium
+
+    eq = find_equilibrium(cfg.system, start)
+    if not eq.converged:
+        raise ValueError(
+            f"no {start} equilibrium found at {param} = {getattr(cfg.system, param):g} "
+            f"(residual {eq.residual:.2g}); change [system] or [continue].start"
+        )
+    say(f"equilibrium ({eq.kind}): stable {eq.stable}, leading eigenvalue "
+        f"{eq.eigenvalues[0]:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
+    return continue_equilibrium(eq, param, bounds, **options)
 
 
 def _census_report(path) -> str:
