@@ -217,6 +217,8 @@ def _cmd_census(args: argparse.Namespace) -> int:
 
 
 def _cmd_continue(args: argparse.Namespace) -> int:
+    from .continuation import continue_equilibrium, continue_orbit, join_branches
+
     cfg = _config_from_args(args)
     if cfg.continuation is None:
         raise ConfigError(
@@ -226,11 +228,18 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     c = dict(cfg.continuation)
     param, bounds = c.pop("param"), c.pop("bounds")
     start = c.pop("start", "orbit")
+    direction = c.pop("direction", 1.0)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     if start == "orbit":
-        branch = _continue_orbit(cfg, param, bounds, c.pop("period", None), c, say)
+        first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
     else:
-        branch = _continue_equilibrium(cfg, param, bounds, start, c, say)
+        first, follow = _equilibrium_from_config(cfg, param, start, say), continue_equilibrium
+    say(f"continuing in {param} over {list(bounds)} ...")
+    if direction == "both":
+        branch = join_branches(follow(first, param, bounds, direction=-1.0, **c),
+                               follow(first, param, bounds, direction=1.0, **c))  # fmt: skip
+    else:
+        branch = follow(first, param, bounds, direction=direction, **c)
     branch.to_hdf5(args.output)
     if not args.quiet:
         print(f"file:      {args.output}  (branch)")
@@ -238,9 +247,8 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     return 0
 
 
-def _continue_orbit(cfg: RunConfig, param: str, bounds, period, options: dict, say):
-    """The orbit of the config's system (simulation, then Newton), continued."""
-    from .continuation import continue_orbit
+def _orbit_from_config(cfg: RunConfig, param: str, period, say):
+    """The orbit of the config's system: a simulation from [initial], then Newton."""
     from .orbits import find_orbit
     from .simulate import simulate
 
@@ -261,13 +269,12 @@ def _continue_orbit(cfg: RunConfig, param: str, bounds, period, options: dict, s
         )
     lead = np.abs(orbit.multipliers).max() if orbit.multipliers.size else float("nan")
     say(f"orbit: period {orbit.period}, T = {orbit.T:.10g}, residual {orbit.residual:.2g}, "
-        f"|leading multiplier| {lead:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
-    return continue_orbit(orbit, param, bounds, **options)
+        f"|leading multiplier| {lead:.4g}")  # fmt: skip
+    return orbit
 
 
-def _continue_equilibrium(cfg: RunConfig, param: str, bounds, start: str, options: dict, say):
-    """The config's system's rest point (``start`` "sliding" or "stall"), continued."""
-    from .continuation import continue_equilibrium
+def _equilibrium_from_config(cfg: RunConfig, param: str, start: str, say):
+    """The config's system's rest point (``start`` "sliding" or "stall")."""
     from .orbits import find_equilibrium
 
     eq = find_equilibrium(cfg.system, start)
@@ -277,8 +284,8 @@ def _continue_equilibrium(cfg: RunConfig, param: str, bounds, start: str, option
             f"(residual {eq.residual:.2g}); change [system] or [continue].start"
         )
     say(f"equilibrium ({eq.kind}): stable {eq.stable}, leading eigenvalue "
-        f"{eq.eigenvalues[0]:.4g}; continuing in {param} over {list(bounds)} ...")  # fmt: skip
-    return continue_equilibrium(eq, param, bounds, **options)
+        f"{eq.eigenvalues[0]:.4g}")  # fmt: skip
+    return eq
 
 
 def _census_report(path) -> str:

@@ -50,7 +50,7 @@ Layout (every section optional except what the command needs)::
     bounds = [1.5, 3.5]   #   with [integration], then Newton on the return map)
     start = "orbit"       # orbit | sliding | stall (equilibria: find_equilibrium, no simulation)
     # period = 1          # default: the period the simulation finds
-    direction = 1         # 1: towards larger param first; -1: smaller
+    direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
 
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
@@ -377,9 +377,10 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
                 raise ConfigError(f"[continue].{key} must be an integer >= 1, got {v!r}")
             out[key] = v
     if "direction" in table:
-        if table["direction"] not in (1, -1) or isinstance(table["direction"], bool):
-            raise ConfigError(f"[continue].direction must be 1 or -1, got {table['direction']!r}")
-        out["direction"] = float(table["direction"])
+        d = table["direction"]
+        if isinstance(d, bool) or d not in (1, -1, "both"):
+            raise ConfigError(f'[continue].direction must be 1, -1 or "both", got {d!r}')
+        out["direction"] = d if d == "both" else float(d)
     for key in ("ds", "ds_min", "ds_max", "tol"):
         if key in table:
             v = table[key]

@@ -32,6 +32,7 @@ __all__ = [
     "Bifurcation",
     "continue_equilibrium",
     "continue_orbit",
+    "join_branches",
     "pseudo_arclength",
     "BRANCH_SCHEMA",
 ]
@@ -222,6 +223,56 @@ class Branch:
         else:
             lines.append("bifurcations: none detected")
         return "\n".join(lines)
+
+
+def join_branches(lower: Branch, upper: Branch) -> Branch:
+    """One branch from two continued from the same start in opposite directions.
+
+    ``lower`` (run with ``direction=-1``) is reversed and put before ``upper``
+    (``direction=+1``), so the values run from the lower end to the upper end
+    through the start, which appears once. Bifurcation indices are renumbered
+    (each still names the point just before the event in the new order); the
+    status reads "lower end: ...; upper end: ...".
+
+    Raises
+    ------
+    ValueError
+        If the two were not continued from one start (system, parameter, period, point).
+    """
+    same = (
+        lower.system == upper.system
+        and lower.param == upper.param
+        and lower.period == upper.period
+        and lower.values[0] == upper.values[0]
+        and np.array_equal(lower.points[0], upper.points[0])
+    )
+    if not same:
+        raise ValueError(
+            "join_branches needs two branches continued from one start (the same system, "
+            "parameter, period and start point)"
+        )
+    n_low = lower.values.size
+    rev = slice(n_low - 1, 0, -1)  # lower's points except its start, in increasing order
+
+    def cat(a, b):
+        return np.concatenate([a[rev], b])
+
+    bifs = [Bifurcation(b.kind, b.value, max(n_low - 2 - b.index, 0), b.point)
+            for b in reversed(lower.bifurcations)]  # fmt: skip
+    bifs += [Bifurcation(b.kind, b.value, n_low - 1 + b.index, b.point)
+             for b in upper.bifurcations]  # fmt: skip
+    return Branch(
+        system=lower.system,
+        param=lower.param,
+        period=lower.period,
+        values=cat(lower.values, upper.values),
+        points=cat(lower.points, upper.points),
+        T=cat(lower.T, upper.T),
+        multipliers=cat(lower.multipliers, upper.multipliers),
+        stable=cat(lower.stable, upper.stable),
+        bifurcations=bifs,
+        status=f"lower end: {lower.status}; upper end: {upper.status}",
+    )
 
 
 # ------------------------------------------------------------------ the core

@@ -157,3 +157,44 @@ def test_cli_continues_an_equilibrium(branch, tmp_path, capsys):
     cfg.write_text('[continue]\nparam = "beta"\nbounds = [0.0005, 0.05]\nstart = "slide"\n')
     assert main(["continue", str(cfg), "-o", str(out)]) == 2
     assert "[continue].start" in capsys.readouterr().err
+
+
+def test_both_directions_join_into_one_branch_through_the_start(tmp_path):
+    from stickslip_fast.cli import main
+    from stickslip_fast.continuation import Branch, join_branches
+
+    e = ssf.find_equilibrium(SYSTEM, "sliding")
+    kw = dict(ds=0.001, ds_max=0.005, max_points=400)
+    down = ssf.continue_equilibrium(e, "beta", (0.0005, 0.05), direction=-1, **kw)
+    up = ssf.continue_equilibrium(e, "beta", (0.0005, 0.05), direction=1, **kw)
+    both = join_branches(down, up)
+    n = down.values.size
+    assert both.values.size == n + up.values.size - 1
+    np.testing.assert_array_equal(both.values[: n - 1], down.values[:0:-1])
+    np.testing.assert_array_equal(both.values[n - 1 :], up.values)
+    assert both.values[0] == 0.0005 and down.status == "bounds"
+    assert both.status == f"lower end: bounds; upper end: {up.status}"
+    # the bifurcations keep their values and name the point just before them in the new order
+    assert [b.kind for b in both.bifurcations] == ["hopf", "fold", "fold"]
+    for b in both.bifurcations:
+        j = b.index
+        lo, hi = sorted(both.values[j : j + 2])
+        assert lo - 1e-9 <= b.value <= hi + 1e-9 or b.kind == "fold"
+    hopf = both.bifurcations[0]
+    assert both.values[hopf.index] <= hopf.value <= both.values[hopf.index + 1]
+    with pytest.raises(ValueError, match="one start"):
+        join_branches(up, ssf.continue_equilibrium(
+            ssf.find_equilibrium(SYSTEM.replace(beta=0.002), "sliding"), "beta", (0.0005, 0.05),
+            **kw))  # fmt: skip
+    # the CLI's direction = "both" writes the joined branch
+    cfg = tmp_path / "e.toml"
+    cfg.write_text(
+        '[system]\npreset = "asymmetric"\ndrive = "dc-motor"\neta = 2.0\n'
+        '[continue]\nparam = "beta"\nbounds = [0.0005, 0.05]\nstart = "sliding"\n'
+        'direction = "both"\nds = 0.001\nds_max = 0.005\nmax_points = 400\n'
+    )
+    out = tmp_path / "both.h5"
+    assert main(["continue", str(cfg), "-o", str(out), "--quiet"]) == 0
+    got = Branch.from_hdf5(out)
+    np.testing.assert_array_equal(got.values, both.values)
+    assert [b.index for b in got.bifurcations] == [b.index for b in both.bifurcations]
