@@ -27,6 +27,7 @@ from .trajectory import (
     METHODS,
     SWEEP_INT_FIELDS,
     continuation_chunk,
+    kernel_variant,
     run_settings,
     sweep_chunk,
 )
@@ -54,12 +55,13 @@ def _param_rows(system: System, names: Sequence[str], values: np.ndarray) -> np.
 
 
 def _kernel_args(system: System, s: Settings) -> tuple:
-    """(n_osc, dc, run settings, max_points): the kernels' arguments after the parameters."""
+    """(n_osc, dc, variant, run settings, max_points): the kernels' arguments after the parameters."""
     rs = run_settings(
         s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
         s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
     )  # fmt: skip
-    return system.n_oscillators, system.is_dc_motor, rs, s.max_points
+    n_osc, dc = system.n_oscillators, system.is_dc_motor
+    return n_osc, dc, kernel_variant(n_osc, dc), rs, s.max_points
 
 
 def _checked(res: tuple) -> tuple:

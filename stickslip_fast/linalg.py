@@ -67,6 +67,33 @@ def lu_solve(a: np.ndarray, piv: np.ndarray, b: np.ndarray, off: int, n: int) ->
         b[off + k] = s / a[k, k]
 
 
+@njit(inline="always", **_JIT)
+def blocks_factor(
+    sigma: float, blocks: np.ndarray, n_osc: int, lu: np.ndarray, piv: np.ndarray
+) -> bool:
+    """Factor the diagonal blocks of W = sigma I - J into ``lu``/``piv``; False if singular.
+
+    All of W for a constant belt. Inlined, so that a literal ``n_osc`` gives
+    constant loop bounds.
+    """
+    for i in range(n_osc):
+        a = lu[i]
+        for r in range(4):
+            for q in range(4):
+                a[r, q] = -blocks[i, r, q]
+            a[r, r] += sigma
+        if not lu_inplace(a, piv[i], 4):
+            return False
+    return True
+
+
+@njit(inline="always", **_JIT)
+def blocks_solve(lu: np.ndarray, piv: np.ndarray, b: np.ndarray, n_osc: int) -> None:
+    """Solve with the factors of :func:`blocks_factor` in place (the disks' rows of b)."""
+    for i in range(n_osc):
+        lu_solve(lu[i], piv[i], b, 4 * i, 4)
+
+
 @njit(**_JIT)
 def w_factor(
     sigma: float,
@@ -86,14 +113,8 @@ def w_factor(
     motor ``z`` (N, 4) receives A_i^{-1} w_i, where w_i = -border_col[i] is W's
     border column. For a constant belt the return value is 1.0.
     """
-    for i in range(n_osc):
-        a = lu[i]
-        for r in range(4):
-            for q in range(4):
-                a[r, q] = -blocks[i, r, q]
-            a[r, r] += sigma
-        if not lu_inplace(a, piv[i], 4):
-            return np.nan
+    if not blocks_factor(sigma, blocks, n_osc, lu, piv):
+        return np.nan
     if not dc:
         return 1.0
     schur = sigma - corner
@@ -122,8 +143,7 @@ def w_solve(
     b: np.ndarray,
 ) -> None:
     """Solve W x = b in place with the factors from :func:`w_factor`."""
-    for i in range(n_osc):
-        lu_solve(lu[i], piv[i], b, 4 * i, 4)
+    blocks_solve(lu, piv, b, n_osc)
     if dc:
         n = 4 * n_osc
         s = b[n]
@@ -135,6 +155,14 @@ def w_solve(
             for r in range(4):
                 b[4 * i + r] -= z[i, r] * xv
         b[n] = xv
+
+
+# The same two functions inlined at Numba IR level, for kernels that know N and
+# the belt at compile time (problems.StickSlipSmall): with literal sizes every
+# loop has constant bounds. Not cached on their own: they only exist inlined.
+_INLINE = dict(_JIT, cache=False, inline="always")
+w_factor_inline = njit(**_INLINE)(w_factor.py_func)
+w_solve_inline = njit(**_INLINE)(w_solve.py_func)
 
 
 @njit(**_JIT)

@@ -33,6 +33,7 @@ from .trajectory import (
     N_STAT_F,
     N_STAT_I,
     integrate,
+    kernel_variant,
     run_settings,
     unroll_ring,
 )
@@ -230,7 +231,8 @@ def simulate(
     )  # fmt: skip
     code = call_interruptible(
         integrate, METHODS.index(s.method), y_init, system.to_array(), system.n_oscillators,
-        system.is_dc_motor, rs, ring, tring, samples, 1.0 if sample_dt is None else sample_dt,
+        system.is_dc_motor, kernel_variant(system.n_oscillators, system.is_dc_motor), rs, ring,
+        tring, samples, 1.0 if sample_dt is None else sample_dt,
         y_end, stat_i, stat_f, abort=new_abort_flag(),
     )  # fmt: skip
     status = STATUS_NAMES[code]
