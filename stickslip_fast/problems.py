@@ -128,7 +128,7 @@ def make_stickslip(p: np.ndarray, n_osc: int, dc: bool, p_buf: np.ndarray) -> St
 
 #: The largest N for which the trajectory kernels compile a :class:`StickSlipSmall`
 #: kernel (each (N, belt) pair is one more compiled kernel per entry point).
-SMALL_N_MAX = 2
+SMALL_N_MAX = 1
 
 
 def small_shape(n_osc: int, dc: bool) -> tuple:

@@ -4,7 +4,7 @@
 methods through :func:`driver.drive`, with a :class:`driver.PoincareObserver`
 (points at the local minima of x1 in a ring buffer, optional uniform samples)
 and classifies the run. :func:`sweep_chunk` and :func:`continuation_chunk` run
-many trajectories in one ``prange`` loop. All of them call the same
+many trajectories in one ``prange`` loop (:func:`_parallel_lanes`, shared). All of them call the same
 :func:`_run`, so a sweep value equals the corresponding simulate() bit for bit.
 
 Kernel rules: nothing here raises (``error_model="numpy"``, no bounds that can
@@ -281,11 +281,12 @@ def integrate(
     stop = _stop_rule(rs, n_osc, dc, n)
     istat = np.zeros(2, dtype=np.int64)
     fstat = np.zeros(2)
-    args = (y0, p, n_osc, dc, variant, rs, obs, stop, y_end, istat, fstat, abort)
+    args = (rs, obs, stop, y_end, istat, fstat, abort)
     if method == M_RODAS5P:
-        status = _run_alone(RODAS5P_METHOD, *args)
+        status = _run_alone(RODAS5P_METHOD, y0, p, n_osc, dc, variant, *args)
     else:
-        status = _run_alone(DOPRI5_METHOD, *args)
+        # explicit steps gain nothing from the variant: one compiled kernel for all
+        status = _run_alone(DOPRI5_METHOD, y0, p, n_osc, dc, (), *args)
     stat_i[I_STEPS] = istat[0]
     stat_i[I_REJECTED] = istat[1]
     stat_i[I_CROSSINGS] = obs.counts[0]
@@ -373,14 +374,12 @@ def _lane_dispatch(
     method, first, stride, count, y0s, chain, params, n_osc, dc, variant, rs, max_points, points,
     t_points, ints, t_conv, final_state, abort,
 ):  # fmt: skip
-    args = (
-        first, stride, count, y0s, chain, params, n_osc, dc, variant, rs, max_points, points, t_points,
-        ints, t_conv, final_state, abort,
-    )  # fmt: skip
+    head = (first, stride, count, y0s, chain, params, n_osc, dc)
+    tail = (rs, max_points, points, t_points, ints, t_conv, final_state, abort)
     if method == M_RODAS5P:
-        _lane_values(RODAS5P_METHOD, *args)
+        _lane_values(RODAS5P_METHOD, *head, variant, *tail)
     else:
-        _lane_values(DOPRI5_METHOD, *args)
+        _lane_values(DOPRI5_METHOD, *head, (), *tail)  # as in integrate()
 
 
 @njit(**_JIT)
@@ -395,6 +394,33 @@ def _outputs(nv: int, max_points: int, n: int):
 
 
 @njit(**_PJIT)
+def _parallel_lanes(
+    method, n_lanes, chain, lane_len, y0s, params, n_osc, dc, variant, rs, max_points, points,
+    t_points, ints, t_conv, final_state, abort,
+):  # fmt: skip
+    """The one ``prange`` loop of both chunk kernels (one parallel compile per variant).
+
+    Restart (``chain`` 0): lane k runs values k, k + n_lanes, ... Chains
+    (``chain`` 1): lane k runs values k * lane_len ... (k + 1) * lane_len - 1
+    in order, each from the previous final state.
+    """
+    nv = params.shape[0]
+    for lane in prange(n_lanes):
+        k = np.int64(lane)  # the prange index may be unsigned: keep index arithmetic int64
+        first = k
+        stride = np.int64(n_lanes)
+        count = (nv - k + stride - 1) // stride
+        if chain:
+            first = k * lane_len
+            stride = np.int64(1)
+            count = np.int64(lane_len)
+        _lane_dispatch(
+            method, first, stride, count, y0s, chain, params, n_osc, dc, variant, rs, max_points,
+            points, t_points, ints, t_conv, final_state, abort,
+        )  # fmt: skip
+
+
+@njit(**_JIT)
 def sweep_chunk(
     method: int,
     y0: np.ndarray,
@@ -428,13 +454,11 @@ def sweep_chunk(
     # long orbits), so each thread takes an interleaved lane of values instead:
     # pass lanes = the thread count. Results do not depend on it.
     lanes = max(1, min(nv, lanes))
-    for lane in prange(lanes):
-        count = (nv - lane + lanes - 1) // lanes
-        _lane_dispatch(
-            method, lane, lanes, count, y0s, False, params, n_osc, dc, variant, rs, max_points,
-            points,
-            t_points, ints, t_conv, final_state, abort,
-        )  # fmt: skip
+    # np.int64(...), not literals: literal arguments would compile a second copy
+    _parallel_lanes(
+        method, lanes, np.int64(0), np.int64(0), y0s, np.ascontiguousarray(params), n_osc, dc, variant, rs, max_points, points,
+        t_points, ints, t_conv, final_state, abort,
+    )  # fmt: skip
     return points, t_points, ints, t_conv, final_state
 
 
@@ -450,7 +474,7 @@ def _starts(y0, nv):
     return out
 
 
-@njit(**_PJIT)
+@njit(**_JIT)
 def continuation_chunk(
     method: int,
     y0: np.ndarray,
@@ -482,11 +506,10 @@ def continuation_chunk(
     for c in range(nc):
         for i in range(n):
             starts[c * nl, i] = y_starts[c, i]
-    for c in prange(nc):
-        _lane_dispatch(
-            method, c * nl, 1, nl, starts, True, flat, n_osc, dc, variant, rs, max_points, points,
-            t_points, ints, t_conv, final_state, abort,
-        )  # fmt: skip
+    _parallel_lanes(
+        method, nc, np.int64(1), np.int64(nl), starts, np.ascontiguousarray(flat), n_osc, dc, variant, rs,
+        max_points, points, t_points, ints, t_conv, final_state, abort,
+    )  # fmt: skip
     return (
         points.reshape(nc, nl, max_points, n),
         t_points.reshape(nc, nl, max_points),
