@@ -6,7 +6,9 @@ belt, 1000 values of eta in [1, 10], t_end 3000 / t_transient 2000) with
 the two, best of ``repeats``; it also reports how many values agree in status
 and period. ``--quick``: 60 values, one repetition.
 
-It then measures the census cost per start on Fig. 6 (issue 9): a 64-start
+It also times the fixed sweep on the generic kernel (the engine before the small-N
+kernel of issue 11; bit-identical results, checked). It then measures the census cost
+per start on Fig. 6 (issue 9): a 64-start
 census (converged stopping, cap 3000) on every 10th value of a 200-value grid
 of eta in [1, 10], timed once; the cost of the 200-value census is projected
 from it (the values are an even stride of that grid, so their cost per value
@@ -43,9 +45,12 @@ def run(mode: str, log) -> dict:
     same = (fixed.status == conv.status) & (fixed.period == conv.period)
     tc = conv.t_converged
     best = {k: min(v) for k, v in times.items()}
-    census = census_cost(system, quick, best["fixed"], n_values, log)
+    # quick mode (the CI smoke test) skips it: one more compiled kernel, ~40 s
+    generic_s = None if quick else fixed_sweep_generic(system, values, kw, results["fixed"], log)
+    census = census_cost(system, quick, best["fixed"], n_values, log, generic_s)
     return dict(
         census=census,
+        fixed_generic_kernel_s=generic_s,
         n_values=n_values,
         repeats=repeats,
         seconds=times,
@@ -60,8 +65,45 @@ def run(mode: str, log) -> dict:
     )
 
 
-def census_cost(system, quick: bool, fixed_s: float, fixed_values: int, log) -> dict:
-    """Seconds per start of a Fig. 6 census, and a 200-value census against the fixed sweep."""
+def fixed_sweep_generic(system, values, kw, fixed_result, log) -> float:
+    """The fixed-window sweep on the generic kernel: the engine as the census issue found it.
+
+    Since the small-N kernel (issue 11) a one-disk sweep runs on
+    ``problems.StickSlipSmall``; the generic bordered kernel it replaced is still there
+    (larger N use it) and gives bit-identical results, so timing it here, in the same
+    run, is "today's 1000-value fixed sweep" of the census issue's cost target.
+    """
+    from stickslip_fast import chunks
+
+    small = chunks.kernel_variant
+    chunks.kernel_variant = lambda n_osc, dc: ()
+    try:
+        ssf.sweep(system, "eta", values[:2], stop="fixed", **kw)  # compile outside the timing
+        t0 = time.perf_counter()
+        res = ssf.sweep(system, "eta", values, stop="fixed", **kw)
+        dt = time.perf_counter() - t0
+    finally:
+        chunks.kernel_variant = small
+    identical = bool(
+        np.array_equal(res.points, fixed_result.points, equal_nan=True)
+        and np.array_equal(res.n_steps, fixed_result.n_steps)
+    )
+    log(f"   fixed, generic kernel: {dt:.1f} s (results bit-identical: {identical})")
+    if not identical:
+        raise RuntimeError(
+            "the generic and the small-N kernel disagree: see tests/test_small_kernel.py"
+        )
+    return dt
+
+
+def census_cost(
+    system, quick: bool, fixed_s: float, fixed_values: int, log, generic_s: float | None = None
+) -> dict:
+    """Seconds per start of a Fig. 6 census, and a 200-value census against the fixed sweep.
+
+    ``generic_s``: the same fixed sweep on the generic kernel (the engine before the
+    small-N kernel), the baseline the census issue named ("today's" sweep).
+    """
     grid = np.linspace(1.0, 10.0, 200)
     values = grid[::100] if quick else grid[::10]
     n_starts = 16 if quick else 64
@@ -85,5 +127,7 @@ def census_cost(system, quick: bool, fixed_s: float, fixed_values: int, log) -> 
         fixed_sweep_s=fixed_s,
         fixed_sweep_values=int(fixed_values),
         ratio_to_fixed_sweep=projected / fixed_s,
+        fixed_sweep_generic_kernel_s=generic_s,
+        ratio_to_fixed_sweep_generic_kernel=None if generic_s is None else projected / generic_s,
         target="a 64-start census of 200 values costs no more than the 1000-value fixed sweep",
     )
