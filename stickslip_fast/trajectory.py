@@ -4,8 +4,9 @@
 methods through :func:`driver.drive`, with a :class:`driver.PoincareObserver`
 (points at the local minima of x1 in a ring buffer, optional uniform samples)
 and classifies the run. :func:`sweep_chunk` and :func:`continuation_chunk` run
-many trajectories in one ``prange`` loop (:func:`_parallel_lanes`, shared). All of them call the same
-:func:`_run`, so a sweep value equals the corresponding simulate() bit for bit.
+many trajectories in one shared ``prange`` loop (:func:`_parallel_lanes`). All of
+them call the same :func:`_run`, so a sweep value equals the corresponding
+simulate() bit for bit.
 
 Kernel rules: nothing here raises (``error_model="numpy"``, no bounds that can
 fail), every loop is bounded (see :mod:`stickslip_fast.driver`), buffers are
