@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
-from .jit import JIT, OVERLOAD, is_record
+from .jit import JIT, OVERLOAD, borrow, is_record, poll_flag
 from .poincare import ring_period
 from .problems import problem_error_norm, problem_initial_step
 from .status import (
@@ -382,6 +382,15 @@ def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) 
     ST_OK (reached t_end or the stop rule fired), ST_MAX_STEPS, ST_UNDERFLOW,
     ST_NONFINITE or ST_INTERRUPTED.
     """
+    # Borrowed records: the step loop below copies them into every inlined call,
+    # and each copy of a counted array costs an atomic instruction (jit.borrow).
+    method = borrow(method)
+    prob = borrow(prob)
+    lin = borrow(lin)
+    ws = borrow(ws)
+    y = borrow(y)
+    obs = borrow(obs)
+    stop = borrow(stop)
     n = y.size
     q = method.q
     rtol = ctl.rtol
@@ -406,7 +415,7 @@ def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) 
     ynew = ws.ynew
 
     while t < t_end:
-        if abort[0] != 0:
+        if poll_flag(abort) != 0:
             status = ST_INTERRUPTED
             break
         if n_steps >= max_steps or n_rej >= max_steps:

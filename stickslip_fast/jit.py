@@ -1,4 +1,4 @@
-"""Compilation options shared by every compiled module, and the record-type test.
+"""Compilation options shared by every compiled module, the record-type test, and borrowing.
 
 ``error_model="numpy"`` makes a division by zero give inf/NaN instead of
 raising: no kernel can raise (see docs/developing.md, "The kernel rules").
@@ -7,8 +7,10 @@ raising: no kernel can raise (see docs/developing.md, "The kernel rules").
 from __future__ import annotations
 
 from numba import types
+from numba.core import cgutils, ir_utils
+from numba.extending import intrinsic
 
-__all__ = ["JIT", "OVERLOAD", "is_record"]
+__all__ = ["JIT", "OVERLOAD", "is_record", "borrow", "poll_flag"]
 
 #: Options of every ``@njit`` of the package.
 JIT = dict(cache=True, nogil=True, error_model="numpy")
@@ -23,3 +25,95 @@ OVERLOAD = dict(jit_options=JIT, inline="always")
 def is_record(typ, cls) -> bool:
     """At compile time: is the Numba type ``typ`` the namedtuple record class ``cls``?"""
     return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is cls
+
+
+# ------------------------------------------------------------------ borrowing
+def _borrowable(typ) -> bool:
+    if isinstance(typ, types.Array):
+        return True
+    if isinstance(typ, types.BaseTuple):
+        return all(_borrowable(t) for t in typ.types)
+    return isinstance(typ, (types.Number, types.Boolean, types.NoneType))
+
+
+def _borrow_value(context, builder, typ, value):
+    """The value with every array in it re-made without its reference count (recursive)."""
+    if isinstance(typ, types.Array):
+        src = context.make_array(typ)(context, builder, value=value)
+        dst = context.make_array(typ)(context, builder)
+        for field in ("nitems", "itemsize", "data", "shape", "strides"):
+            setattr(dst, field, getattr(src, field))
+        dst.meminfo = cgutils.get_null_value(dst.meminfo.type)
+        dst.parent = cgutils.get_null_value(dst.parent.type)
+        return dst._getvalue()
+    if isinstance(typ, types.BaseTuple):
+        items = cgutils.unpack_tuple(builder, value, len(typ))
+        fields = [_borrow_value(context, builder, t, v) for t, v in zip(typ.types, items)]
+        return context.make_tuple(builder, typ, fields)
+    return value
+
+
+@intrinsic
+def borrow(typingctx, value):  # noqa: ARG001 - the intrinsic's typing signature
+    """In compiled code: ``value`` (an array, or a record of arrays and scalars) borrowed.
+
+    The result has the same type and sees the same memory, but its arrays carry
+    no reference count (a null ``meminfo``), so copying, passing or taking a
+    field of it costs nothing. Numba counts references with an atomic
+    instruction at every copy of an array, and inlined records copy all their
+    arrays at every call: in the driver's step loop that was ~100 atomics per
+    Rodas5P attempt and half its time (benchmarks/results/profile.md, section 5).
+
+    A borrowed value is valid only while the caller's original is alive: use it
+    inside the function that borrowed it, and never return or store it. Numba's
+    dead-code elimination is told that the result aliases ``value``
+    (:func:`_borrow_aliases`); without that, writes into a borrowed record made
+    by an IR-inlined overload were removed as dead.
+    """
+    if not _borrowable(value):
+        return None
+    sig = value(value)
+
+    def codegen(context, builder, signature, args):
+        return _borrow_value(context, builder, signature.args[0], args[0])
+
+    return sig, codegen
+
+
+def _borrow_aliases(lhs: str, args, alias_map: dict, arg_aliases: set) -> None:
+    """Numba alias analysis: ``lhs = borrow(x)`` aliases x.
+
+    Numba removes a write into an array that it believes nothing else can see
+    (one reached from a call's result, not from an argument). Without this
+    rule every store an IR-inlined overload made into a borrowed record was
+    dropped (measured: lost Poincare times, a wrong Lyapunov exponent).
+    """
+    rhs = args[0].name
+    if rhs in arg_aliases:
+        arg_aliases.add(lhs)
+        return
+    alias_map.setdefault(rhs, set()).add(lhs)
+    alias_map.setdefault(lhs, set()).add(rhs)
+
+
+ir_utils.alias_func_extensions[("borrow", __name__)] = _borrow_aliases
+
+
+@intrinsic
+def poll_flag(typingctx, flag):  # noqa: ARG001 - the intrinsic's typing signature
+    """In compiled code: ``flag[0]`` of an integer array, read with an atomic (relaxed) load.
+
+    For flags set from another thread (the abort flag of Ctrl-C): a plain load
+    in a loop with no opaque calls left may legally be hoisted out of the loop
+    by LLVM, and then the loop never sees the flag change.
+    """
+    if not (isinstance(flag, types.Array) and flag.ndim == 1
+            and isinstance(flag.dtype, types.Integer)):  # fmt: skip
+        return None
+    sig = flag.dtype(flag)
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, value=args[0])
+        return builder.load_atomic(ary.data, "monotonic", signature.return_type.bitwidth // 8)
+
+    return sig, codegen

@@ -87,11 +87,35 @@ _LONG_RUN = """
 import stickslip_fast as ssf, numpy as np, sys
 print("ready", flush=True)
 if sys.argv[1] == "simulate":
-    ssf.simulate(ssf.System.preset("literature", eta=2.7), 5e6, max_points=10)
+    ssf.simulate(ssf.System.preset("literature", eta=2.7), 1e8, max_points=10,
+                 max_steps=10**10)
 else:
-    ssf.sweep(ssf.System.preset("literature"), "eta", np.linspace(2, 3, 4), t_end=5e6,
-              progress=False, out=sys.argv[2])
+    ssf.sweep(ssf.System.preset("literature"), "eta", np.linspace(2, 3, 4), t_end=1e8,
+              max_steps=10**10, progress=False, out=sys.argv[2])
 """
+
+
+def _sigint_state(pid: str = "self") -> str:
+    """SIGINT's bit in the blocked and ignored signal sets of a process (Linux), for messages."""
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            fields = dict(line.split(":", 1) for line in fh if ":" in line)
+    except OSError:
+        return "unknown"
+    bit = 1 << (signal.SIGINT - 1)
+    return ", ".join(
+        f"{k} {'SIGINT' if int(fields[k], 16) & bit else '-'}"
+        for k in ("SigBlk", "SigIgn")
+        if k in fields
+    )
+
+
+def _default_sigint() -> None:
+    # A terminal's Ctrl-C reaches a process with SIGINT handled by default. The test
+    # runner's process may have it ignored or blocked (inherited across exec), so the
+    # child starts from the terminal's state.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
 
 
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
@@ -99,29 +123,39 @@ else:
 def test_ctrl_c_stops_compiled_work_promptly(what, tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-c", _LONG_RUN, what, str(tmp_path / "s.h5")],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint,
     )  # fmt: skip
+    runner = _sigint_state()
     assert proc.stdout.readline().strip() == "ready"
     time.sleep(8.0)  # compile (cached) and get into the long run
     assert proc.poll() is None
     sent = time.perf_counter()
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    try:
+        _, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        child = _sigint_state(str(proc.pid))
+        proc.kill()
+        pytest.fail(f"no exit 60 s after SIGINT; child {child}, runner {runner}")
     waited = time.perf_counter() - sent
-    assert "KeyboardInterrupt" in err and "SystemError" not in err
+    assert "KeyboardInterrupt" in err and "SystemError" not in err, (err, runner)
     assert waited < 10.0, waited  # within about a second on a quiet machine
 
 
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
 def test_ctrl_c_on_cli_simulate_says_interrupted_and_exits_130():
     proc = subprocess.Popen(
+        # three disks on a DC motor: long enough per step that max_steps (2e7) takes
+        # well over the 10 s below
         [sys.executable, "-m", "stickslip_fast.cli", "simulate", "--preset", "literature",
-         "--t-end", "5e6", "--max-points", "10"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+         "--eta", "2.7", "--n-oscillators", "3", "--drive", "dc-motor", "--t-end", "1e8",
+         "--max-points", "10"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint,
     )  # fmt: skip
+    runner = _sigint_state()
     time.sleep(10.0)
     assert proc.poll() is None
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130
+    assert proc.returncode == 130, (err, runner)
     assert err.strip().splitlines()[-1] == "stickslip-fast: interrupted", err
