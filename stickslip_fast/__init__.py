@@ -21,7 +21,14 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
 from .census import CensusResult, census, load_census
-from .continuation import Bifurcation, Branch, continue_equilibrium, continue_orbit, join_branches
+from .continuation import (
+    Bifurcation,
+    Branch,
+    continue_equilibrium,
+    continue_orbit,
+    join_branches,
+    switch_branch,
+)
 from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
@@ -55,6 +62,7 @@ __all__ = [
     "find_equilibrium",
     "Equilibrium",
     "continue_orbit",
+    "switch_branch",
     "continue_equilibrium",
     "join_branches",
     "Branch",

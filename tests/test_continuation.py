@@ -7,11 +7,13 @@ orbit continuation against brute-force simulation of the engine. About 10 s warm
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.continuation import continue_orbit, pseudo_arclength
+from stickslip_fast.continuation import continue_orbit, period_doubling_start, pseudo_arclength
 
 KW = dict(ds=0.05, ds_min=1e-6, ds_max=0.1, max_points=200, tol=1e-12)
 
@@ -170,3 +172,85 @@ def test_cli_continue_errors_name_the_problem(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "no periodic orbit" in err and "'equilibrium'" in err
     assert not (tmp_path / "b.h5").exists()
+
+
+def fold_pd_map_twice(x):
+    # the second iterate of fold_pd_map: z1 -> f(f(z1)), f(z) = z + lam - z^2; z2 -> z2 / 4.
+    # Its period-2 points are z1 = 1 +- sqrt(lam - 1) (lam > 1), with multiplier
+    # f'(z) f'(w) = 5 - 4 lam: stable on (1, 1.5), a period-doubling again at lam = 1.5
+    z1, z2, lam = x
+    w = z1 + lam - z1 * z1
+    ww = w + lam - w * w
+    d = (1 - 2 * w) * (1 - 2 * z1)
+    A = np.diag([d, 0.25])
+    G = np.array([ww - z1, -0.75 * z2])
+    DG = np.array([[d - 1.0, 0.0, (1 - 2 * w) + 1.0], [0.0, -0.75, 0.0]])
+    return True, G, DG, A
+
+
+def test_period_doubling_branch_switching_on_the_analytic_map():
+    xs, mults, bifs, _ = pseudo_arclength(
+        fold_pd_map, np.array([0.5, 0.0, 0.25]), 1.0, (-1.0, 1.5), **KW
+    )
+    kind, lam_pd, _, x_pd = bifs[0]
+    assert kind == "period-doubling"
+    # the -1 eigenvector of the map's Jacobian at the located point
+    _, _, _, A = fold_pd_map(x_pd)
+    mu, vecs = np.linalg.eig(A)
+    v = np.real(vecs[:, np.argmin(np.abs(mu + 1))])
+    for delta in (1e-2, 1e-3):
+        ok, x = period_doubling_start(fold_pd_map_twice, x_pd, v, delta, tol=1e-13)
+        assert ok
+        # on the doubled branch: (z1 - 1)^2 = lam - 1, off the period-1 branch z1^2 = lam
+        assert abs(abs(x[0] - 1.0) - delta) < 1e-7
+        assert abs((x[0] - 1.0) ** 2 - (x[2] - 1.0)) < 1e-12
+        assert abs(x[0] ** 2 - x[2]) > 1e-3
+    # continued away from the period-doubling: the whole doubled branch, its multiplier
+    # 5 - 4 lam, and its own period-doubling at lam = 1.5
+    xs2, mults2, bifs2, status2 = pseudo_arclength(fold_pd_map_twice, x, 1.0, (0.9, 1.6), **KW)
+    np.testing.assert_allclose((xs2[:, 0] - 1.0) ** 2, xs2[:, 2] - 1.0, atol=1e-10)
+    d = 5.0 - 4.0 * xs2[:, 2]
+    assert np.all(np.min(np.abs(mults2 - d[:, None]), axis=1) < 1e-9)
+    assert [b[0] for b in bifs2] == ["period-doubling"]
+    assert abs(bifs2[0][1] - 1.5) < 1e-8
+
+
+# A point of the period-2 orbit of Fig. 6 (asymmetric set, constant belt) near its lower
+# end, from continue_orbit started at eta = 7.0 (data/continuation/fig06_p2.toml)
+P2_ETA = 5.043198103554579
+P2_POINT = [0.027234629670059556, 0.0, 0.12785148813700828, -0.0038733936156032087]
+
+
+def test_switching_at_the_period_doubling_of_fig6_p2_gives_a_period_4_orbit():
+    s = ssf.System.preset("asymmetric", eta=P2_ETA)
+    o2 = ssf.find_orbit(s, np.array(P2_POINT), period=2)
+    assert o2.converged and o2.stable
+    br = continue_orbit(o2, "eta", (5.0428, 5.0433), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
+                        max_points=8, direction=-1)  # fmt: skip
+    pds = [b for b in br.bifurcations if b.kind == "period-doubling"]
+    assert len(pds) == 1 and abs(pds[0].value - 5.042952433) < 1e-8
+    o4 = ssf.switch_branch(br, pds[0])
+    assert o4.converged and o4.period == 4 and o4.residual <= 1e-10
+    # a genuine period-4 orbit (its halves differ), born on the side where the
+    # period-2 orbit is stable, and unstable: the period-doubling is subcritical
+    assert np.max(np.abs(o4.points[0] - o4.points[2])) > 1e-7
+    d_eta = o4.system.eta - pds[0].value
+    assert 0 < d_eta < 1e-5
+    assert not o4.stable and 1.0 < abs(o4.multipliers[0]) < 1.1
+    # brute force: from its first point the flow returns through its four points
+    r = ssf.simulate(o4.system, o4.T * 1.01, y0=o4.points[0], rtol=1e-12, atol=1e-14)
+    assert r.poincare.shape[0] == 4
+    np.testing.assert_allclose(r.poincare, o4.points[[1, 2, 3, 0]], atol=1e-7)
+    np.testing.assert_allclose(r.t_poincare, o4.times, atol=1e-6)
+
+
+def test_switch_branch_rejects_what_is_not_a_period_doubling(branch):
+    _, br = branch
+    with pytest.raises(ValueError, match="bifurcation"):
+        ssf.switch_branch(br, 0)  # the branch has no bifurcations
+    eq_branch = dataclasses.replace(br, period=0)
+    with pytest.raises(ValueError, match="branch"):
+        ssf.switch_branch(eq_branch, 0)
+    fold = ssf.Bifurcation("fold", 2.0, 0, br.points[0])
+    with pytest.raises(ValueError, match="period-doubling"):
+        ssf.switch_branch(dataclasses.replace(br, bifurcations=[fold]), fold)
