@@ -70,8 +70,9 @@ def fixed_sweep_generic(system, values, kw, fixed_result, log) -> float:
 
     Since the small-N kernel (issue 11) a one-disk sweep runs on
     ``problems.StickSlipSmall``; the generic bordered kernel it replaced is still there
-    (larger N use it) and gives bit-identical results, so timing it here, in the same
-    run, is "today's 1000-value fixed sweep" of the census issue's cost target.
+    (larger N use it) and gives bit-identical results. Until the driver borrowed its
+    records (2026-11-23) this was "today's 1000-value fixed sweep" of the census issue's
+    cost target; since then the generic kernel is ~4x faster too (docs/census.md).
     """
     from stickslip_fast import chunks
 
@@ -101,8 +102,7 @@ def census_cost(
 ) -> dict:
     """Seconds per start of a Fig. 6 census, and a 200-value census against the fixed sweep.
 
-    ``generic_s``: the same fixed sweep on the generic kernel (the engine before the
-    small-N kernel), the baseline the census issue named ("today's" sweep).
+    ``generic_s``: the same fixed sweep on the generic kernel (bit-identical results).
     """
     grid = np.linspace(1.0, 10.0, 200)
     values = grid[::100] if quick else grid[::10]

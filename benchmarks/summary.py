@@ -120,9 +120,8 @@ def write_summary(r):
             g = c.get("ratio_to_fixed_sweep_generic_kernel")
             if g is not None:
                 L.append(
-                    f"| census as above / the same fixed sweep on the generic kernel (the "
-                    f"engine before the small-N kernel: the census issue's \"today's\" "
-                    f"sweep; bit-identical results) | {c['projected_200x64_s']:.0f} s / "
+                    f"| census as above / the same fixed sweep on the generic kernel "
+                    f"(bit-identical results) | {c['projected_200x64_s']:.0f} s / "
                     f"{c['fixed_sweep_generic_kernel_s']:.1f} s = {g:.2f}x | <= 1x "
                     f"| {_verdict(g, 1.0, higher_is_better=False)} |"
                 )

@@ -30,7 +30,7 @@ Branch files (``stickslip-fast continue``, :meth:`Branch.to_hdf5`) are drawn ove
 1-D sweep or a census with ``--branch`` (repeatable): the continued section point
 against the parameter, black for orbits and grey for equilibria, solid where
 stable and dashed where unstable, with each located bifurcation marked and
-labelled (F fold, PD period-doubling, NS Neimark-Sacker, H Hopf, G section
+labelled (F fold, PD period-doubling, NS Neimark-Sacker, H Hopf, S stick phase, G section
 grazing). Only the orbit's first section point is continued, so a period-p
 branch is one curve through one of its p points. ``--multipliers`` adds a
 panel with the largest |Floquet multiplier| of every orbit branch (1 marks the

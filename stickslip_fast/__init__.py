@@ -29,7 +29,7 @@ from .continuation import (
     join_branches,
     switch_branch,
 )
-from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
+from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
 from .poincare import STATUS_NAMES
 from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
@@ -58,6 +58,7 @@ __all__ = [
     "SyncResult",
     "sync_error",
     "find_orbit",
+    "stick_phases",
     "Orbit",
     "find_equilibrium",
     "Equilibrium",

@@ -32,6 +32,7 @@ from .orbits import (
     _field,
     find_orbit,
     return_map,
+    stick_phases,
 )
 from .system import SWEEPABLE
 
@@ -48,7 +49,9 @@ __all__ = [
 ]
 
 #: Version of the HDF5 layout written by :meth:`Branch.to_hdf5`.
-BRANCH_SCHEMA = 1
+BRANCH_SCHEMA = 2
+#: Older schemas this version still reads (see :meth:`Branch.from_hdf5`).
+READABLE_BRANCH_SCHEMAS = (1, 2)
 
 # evaluate(x) -> (ok, G (m,), DG (m, m + 1), A (m, m)): residual, its Jacobian in (z, lambda),
 # and the map's Jacobian in z (whose eigenvalues are the multipliers)
@@ -59,9 +62,12 @@ Evaluator = Callable[[np.ndarray], tuple[bool, np.ndarray, np.ndarray, np.ndarra
 class Bifurcation:
     """A located bifurcation or branch end.
 
-    ``kind``: "fold", "period-doubling", "neimark-sacker", or "section-grazing" (the
+    ``kind``: "fold", "period-doubling", "neimark-sacker", "section-grazing" (the
     return map is discontinuous there: the period in time jumps because a crossing of
-    dx1 = 0 appears or vanishes; the branch of P^p ends) on orbit branches; "fold" or
+    dx1 = 0 appears or vanishes; the branch of P^p ends) or "stick-phase" (the number of
+    stick phases per period changes: one appears or vanishes, see
+    :func:`~stickslip_fast.orbits.stick_phases`; the point is the first one past the
+    change) on orbit branches; "fold" or
     "hopf" (a complex pair of the Jacobian's eigenvalues crosses the imaginary axis) on
     equilibrium branches. ``value``: the parameter;
     ``index``: the branch point just before it (for "section-grazing": the last point,
@@ -76,7 +82,7 @@ class Bifurcation:
     @property
     def label(self) -> str:
         return {"fold": "F", "period-doubling": "PD", "neimark-sacker": "NS",
-                "section-grazing": "G", "hopf": "H"}[self.kind]  # fmt: skip
+                "section-grazing": "G", "hopf": "H", "stick-phase": "S"}[self.kind]  # fmt: skip
 
 
 @dataclass
@@ -111,6 +117,11 @@ class Branch:
         Why the branch ended: "bounds" (the last point lies on one of them),
         "max-points", "step-too-small" (the corrector failed at ds_min)
         or "nonsmooth" (a section grazing, recorded in ``bifurcations``).
+    stick_count : ndarray of int, shape (k,), optional
+        Stick phases per period at each point (all disks together; -1 where not
+        computed). None for equilibria.
+    stick_time : ndarray, shape (k,), optional
+        Total time per period spent sticking (NaN where not computed).
     """
 
     system: Any
@@ -123,14 +134,17 @@ class Branch:
     stable: np.ndarray
     bifurcations: list[Bifurcation] = field(default_factory=list)
     status: str = ""
+    stick_count: np.ndarray | None = None
+    stick_time: np.ndarray | None = None
 
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the branch to HDF5 (schema: docs/orbits.md, "Branch files").
 
         Datasets ``values`` (point), ``points`` (point, state), ``T`` (point),
         ``multipliers_real`` / ``multipliers_imag`` (point, multiplier), ``stable``
-        (point), ``bifurcation_kind`` / ``bifurcation_value`` / ``bifurcation_index``
-        (bifurcation); attributes ``kind = "branch"``, ``schema_version``, ``param``,
+        (point), ``stick_count`` / ``stick_time`` (point; orbit branches),
+        ``bifurcation_kind`` / ``bifurcation_value`` / ``bifurcation_index``
+        (bifurcation), ``bifurcation_point`` (bifurcation, state); attributes ``kind = "branch"``, ``schema_version``, ``param``,
         ``period``, ``status`` and ``system`` (JSON). Readable with
         ``xarray.open_dataset(path, engine="h5netcdf", phony_dims="sort")``.
         """
@@ -159,6 +173,12 @@ class Branch:
                 )
                 h5["bifurcation_value"] = np.array([b.value for b in self.bifurcations], "f8")
                 h5["bifurcation_index"] = np.array([b.index for b in self.bifurcations], "i8")
+                h5["bifurcation_point"] = np.array(
+                    [b.point for b in self.bifurcations], "f8"
+                ).reshape(len(self.bifurcations), self.points.shape[1])
+                if self.stick_count is not None:
+                    h5["stick_count"] = np.asarray(self.stick_count, "i8")
+                    h5["stick_time"] = np.asarray(self.stick_time, "f8")
             tmp.replace(path)
         except BaseException:
             tmp.unlink(missing_ok=True)
@@ -168,6 +188,10 @@ class Branch:
     @classmethod
     def from_hdf5(cls, path: str | Path) -> Branch:
         """Read a branch file written by :meth:`to_hdf5`.
+
+        Schema 1 files (before 2026-11-23) stored no bifurcation points: their
+        ``Bifurcation.point`` is the branch point just before the event, good to
+        ~ds only (continue again before :func:`switch_branch`).
 
         Raises
         ------
@@ -183,20 +207,27 @@ class Branch:
             if kind != "branch":
                 raise ValueError(f"{path}: not a branch file (kind = {kind!r})")
             version = int(h5.attrs.get("schema_version", -1))
-            if version != BRANCH_SCHEMA:
+            if version not in READABLE_BRANCH_SCHEMAS:
                 raise ValueError(
-                    f"{path}: branch schema_version {version}; this version reads {BRANCH_SCHEMA}"
+                    f"{path}: branch schema_version {version}; this version reads "
+                    f"{', '.join(map(str, READABLE_BRANCH_SCHEMAS))}"
                 )
             kinds = [k.decode() if isinstance(k, bytes) else str(k)
                      for k in h5["bifurcation_kind"][()]]  # fmt: skip
             values = h5["values"][()]
             points = h5["points"][()]
+            if "bifurcation_point" in h5:
+                bif_points = h5["bifurcation_point"][()]
+            else:  # schema 1: the branch point before the event
+                bif_points = [points[min(int(i), len(points) - 1)]
+                              for i in h5["bifurcation_index"][()]]  # fmt: skip
             bifs = [
                 Bifurcation(kinds[j], float(h5["bifurcation_value"][j]),
-                            int(h5["bifurcation_index"][j]),
-                            points[min(int(h5["bifurcation_index"][j]), len(points) - 1)])
+                            int(h5["bifurcation_index"][j]), np.array(bif_points[j]))
                 for j in range(len(kinds))
             ]  # fmt: skip
+            stick_count = h5["stick_count"][()] if "stick_count" in h5 else None
+            stick_time = h5["stick_time"][()] if "stick_time" in h5 else None
             return cls(
                 system=System.from_dict(json.loads(h5.attrs["system"])),
                 param=str(h5.attrs["param"]),
@@ -208,6 +239,8 @@ class Branch:
                 stable=h5["stable"][()].astype(bool),
                 bifurcations=bifs,
                 status=str(h5.attrs["status"]),
+                stick_count=stick_count,
+                stick_time=stick_time,
             )
 
     def summary(self) -> str:
@@ -282,6 +315,16 @@ def join_branches(lower: Branch, upper: Branch) -> Branch:
         stable=cat(lower.stable, upper.stable),
         bifurcations=bifs,
         status=f"lower end: {lower.status}; upper end: {upper.status}",
+        stick_count=(
+            cat(lower.stick_count, upper.stick_count)
+            if lower.stick_count is not None and upper.stick_count is not None
+            else None
+        ),  # fmt: skip
+        stick_time=(
+            cat(lower.stick_time, upper.stick_time)
+            if lower.stick_time is not None and upper.stick_time is not None
+            else None
+        ),  # fmt: skip
     )
 
 
@@ -637,6 +680,7 @@ def continue_orbit(
     rtol: float = 1e-11,
     atol: float = 1e-13,
     fd_step: float = 1e-7,
+    stick_events: bool = True,
 ) -> Branch:
     """Continue a periodic orbit in one parameter (pseudo-arclength).
 
@@ -663,6 +707,11 @@ def continue_orbit(
         Relative step of the central difference dP/dlambda (the variational
         equations give the Jacobian in z only; one-sided at the edge of the
         parameter's valid range).
+    stick_events : bool
+        Record the stick phases of every point (``Branch.stick_count``,
+        ``stick_time``; :func:`~stickslip_fast.orbits.stick_phases`) and locate
+        every change of their number between two points (bisection on the
+        branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
 
     Returns
     -------
@@ -710,6 +759,28 @@ def continue_orbit(
         if not math.isfinite(T[i]):
             _, _, times, _ = return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)
             T[i] = times[-1]
+    stick_count = stick_time = None
+    if stick_events:
+        stick_count = np.full(len(xs), -1, dtype=np.int64)
+        stick_time = np.full(len(xs), np.nan)
+
+        def geometry(x, T_x):
+            d = stick_phases(system_at(x[-1]), full(x), T_x)
+            return d.size, float(d.sum())
+
+        for i, x in enumerate(xs):
+            if math.isfinite(T[i]):
+                stick_count[i], stick_time[i] = geometry(x, T[i])
+        for i in range(len(xs) - 1):
+            a, b = stick_count[i], stick_count[i + 1]
+            if a >= 0 and b >= 0 and a != b:
+                loc = _locate_change(
+                    evaluate, xs[i], xs[i + 1], a,
+                    lambda x: geometry(x, periods.get(x.tobytes(), math.nan))[0],
+                    tol, 1e-8,
+                )  # fmt: skip
+                bifs.append(("stick-phase", float(loc[-1]), i, loc))
+        bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
     return Branch(
         system=system0,
         param=param,
@@ -721,7 +792,37 @@ def continue_orbit(
         stable=np.all(np.abs(mults) < 1.0, axis=1),
         bifurcations=[Bifurcation(k, v, i, full(x)) for k, v, i, x in bifs],
         status=status,
+        stick_count=stick_count,
+        stick_time=stick_time,
     )
+
+
+def _locate_change(evaluate, xa, xb, count_a, count_at, tol, locate_tol):
+    """Bisection on the chord xa -> xb (each trial corrected onto the branch) for where
+    the integer ``count_at(x)`` stops being ``count_a``; returns the first point past it
+    (xb if no trial converges), within ``locate_tol`` in the parameter."""
+    chord = xb - xa
+    normal = chord / np.linalg.norm(chord)
+    a, b = 0.0, 1.0
+    x_past = xb
+    for _ in range(60):
+        if abs(chord[-1]) * (b - a) <= locate_tol:
+            break
+        sig = 0.5 * (a + b)
+        anchor = xa + sig * chord
+        okc, x, _, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
+        if not okc:
+            break
+        try:
+            same = count_at(x) == count_a
+        except ValueError:  # the orbit could not be sampled there
+            break
+        if same:
+            a = sig
+        else:
+            b = sig
+            x_past = x
+    return x_past
 
 
 # ------------------------------------------------------------ branch switching

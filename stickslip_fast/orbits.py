@@ -52,7 +52,9 @@ __all__ = [
     "find_orbit",
     "find_equilibrium",
     "return_map",
+    "stick_phases",
     "ORBIT_STATUSES",
+    "STICK_SPEED",
 ]
 
 #: Index of the section coordinate dx1 in the state.
@@ -60,6 +62,11 @@ SECTION_INDEX = 1
 #: A fixed point of the map where max |f| is below this is a rest point, not an orbit: near
 #: a stable focus the return map contracts onto the equilibrium, which it leaves fixed.
 EQUILIBRIUM_SPEED = 1e-8
+
+#: A disk sticks while its slip speed sqrt((dx - v_b)^2 + dphi^2) is below this many
+#: eps (the friction law's regularisation; 100 eps = 1e-3 at the presets): far below
+#: the slip speeds of a slip phase, far above the creep inside a stick phase.
+STICK_SPEED = 100.0
 
 #: Outcomes of :func:`find_orbit` (``Orbit.status``).
 ORBIT_STATUSES = (
@@ -655,3 +662,71 @@ def find_equilibrium(
         iterations=it,
         converged=converged,
     )
+
+
+def stick_phases(
+    system: System,
+    point: np.ndarray,
+    T: float,
+    *,
+    threshold: float = STICK_SPEED,
+    n_samples: int = 20000,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+) -> np.ndarray:
+    """The stick phases of a periodic orbit: their durations, one per phase and disk.
+
+    Integrates one period T from ``point`` (on the orbit) and samples it
+    ``n_samples`` times. A disk sticks while its slip speed
+    sqrt((dx_i - v_b)^2 + dphi_i^2) is below ``threshold`` eps; a stick phase is a
+    maximal run of sticking samples, counted cyclically (a phase across t = 0 = T
+    is one phase). For N disks the phases of every disk are listed.
+
+    Parameters
+    ----------
+    system : System
+    point : array_like, shape (n_state,)
+        A state on the orbit (e.g. ``orbit.points[0]``).
+    T : float
+        The period in time.
+    threshold : float
+        Stick speed in units of ``system.eps`` (:data:`STICK_SPEED`).
+    n_samples : int
+        Samples per period; phases shorter than T / n_samples may be missed.
+    rtol, atol : float
+        Integration tolerances.
+
+    Returns
+    -------
+    ndarray
+        The durations of the stick phases (its length is their number; empty
+        for a pure slip orbit; ``[T]`` for a disk that never slips).
+
+    Raises
+    ------
+    ValueError
+        For a non-finite or non-positive T, or a state of the wrong size.
+    """
+    y0 = _finite_state("point", point, system.n_state)
+    if not (math.isfinite(T) and T > 0):
+        raise ValueError(f"T must be a finite number > 0, got {T!r}")
+    dt = T / n_samples
+    r = simulate(system, T, y0=y0, sample_dt=dt, rtol=rtol, atol=atol, max_points=1)
+    y = r.y[:n_samples]
+    if y.shape[0] < n_samples or not np.all(np.isfinite(y)):
+        raise ValueError(f"the orbit could not be sampled over one period (status {r.status!r})")
+    n = system.n_oscillators
+    vb = y[:, -1] if system.is_dc_motor else np.full(len(y), system.vb)
+    out = []
+    for i in range(n):
+        speed = np.hypot(y[:, 4 * i + 1] - vb, y[:, 4 * i + 3])
+        stick = speed < threshold * system.eps
+        if stick.all():
+            out.append(float(T))
+            continue
+        # cyclic runs: start at a slipping sample so that no run wraps around
+        k0 = int(np.argmin(stick))
+        st = np.roll(stick, -k0)
+        edges = np.flatnonzero(np.diff(np.r_[0, st.astype(np.int8), 0]))
+        out.extend(float((b - a) * dt) for a, b in zip(edges[::2], edges[1::2]))
+    return np.array(out)

@@ -13,7 +13,12 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.continuation import continue_orbit, period_doubling_start, pseudo_arclength
+from stickslip_fast.continuation import (
+    Branch,
+    continue_orbit,
+    period_doubling_start,
+    pseudo_arclength,
+)
 
 KW = dict(ds=0.05, ds_min=1e-6, ds_max=0.1, max_points=200, tol=1e-12)
 
@@ -254,3 +259,42 @@ def test_switch_branch_rejects_what_is_not_a_period_doubling(branch):
     fold = ssf.Bifurcation("fold", 2.0, 0, br.points[0])
     with pytest.raises(ValueError, match="period-doubling"):
         ssf.switch_branch(dataclasses.replace(br, bifurcations=[fold]), fold)
+
+
+def test_a_stick_phase_appearing_along_fig6_p2_is_located(tmp_path):
+    """Fig. 6's period-2 orbit has one stick phase per period at eta = 7 and two at 8
+    (brute force from rest agrees); the continuation records the counts and locates the
+    change to 1e-8 in eta as a "stick-phase" event."""
+    for eta, count in ((7.0, 1), (8.0, 2)):
+        s = ssf.System.preset("asymmetric", eta=eta)
+        o = ssf.find_orbit(s, ssf.simulate(s, 20000, stop="converged"))
+        assert o.period == 2 and ssf.stick_phases(s, o.points[0], o.T).size == count
+        if eta == 7.0:
+            start = o
+    br = continue_orbit(start, "eta", (7.0, 8.0), ds=0.05, ds_max=0.1, max_points=40)
+    assert br.status == "bounds" and br.stable.all()
+    assert br.stick_count[0] == 1 and br.stick_count[-1] == 2
+    events = [b for b in br.bifurcations if b.kind == "stick-phase"]
+    assert len(events) == 1 and 7.6 < events[0].value < 7.75
+    i = events[0].index
+    assert br.stick_count[i] == 1 and br.stick_count[i + 1] == 2
+    # the located point is past the change: its orbit has two stick phases
+    s_ev = ssf.System.preset("asymmetric", eta=events[0].value)
+    o_ev = ssf.find_orbit(s_ev, events[0].point, period=2)
+    assert o_ev.converged and ssf.stick_phases(s_ev, o_ev.points[0], o_ev.T).size == 2
+    assert events[0].label == "S"
+    # schema 2 keeps the located points and the stick geometry; schema 1 files still read
+    import h5py
+
+    path = br.to_hdf5(tmp_path / "p2.h5")
+    back = Branch.from_hdf5(path)
+    np.testing.assert_array_equal(back.stick_count, br.stick_count)
+    np.testing.assert_array_equal(back.stick_time, br.stick_time)
+    np.testing.assert_array_equal(back.bifurcations[0].point, events[0].point)
+    with h5py.File(path, "a") as h5:
+        h5.attrs["schema_version"] = 1
+        for name in ("bifurcation_point", "stick_count", "stick_time"):
+            del h5[name]
+    old = Branch.from_hdf5(path)
+    assert old.stick_count is None
+    np.testing.assert_array_equal(old.bifurcations[0].point, br.points[i])

@@ -246,3 +246,40 @@ def test_bad_input_names_the_argument(converged):
         ssf.find_equilibrium(s, "stall")  # constant belt
     with pytest.raises(ValueError, match="start"):
         ssf.find_equilibrium(s, "resting")
+
+
+def _reference_stick_durations(s, point, T, threshold=100.0, n=20000):
+    """The stick phases of one period from the independent SciPy model (Radau, rtol 1e-12)."""
+    from scipy.integrate import solve_ivp
+
+    p = _ref_params(s)
+    dt = T / n
+    t_eval = np.arange(n) * dt
+    sol = solve_ivp(scipy_model.rhs, (0.0, T), point, method="Radau", t_eval=t_eval,
+                    rtol=1e-12, atol=1e-14, args=(p,), jac=scipy_model.jac)  # fmt: skip
+    speed = np.hypot(sol.y[1] - s.vb, sol.y[3])
+    stick = speed < threshold * s.eps
+    k0 = int(np.argmin(stick))
+    st = np.roll(stick, -k0).astype(int)
+    edges = np.flatnonzero(np.diff(np.r_[0, st, 0]))
+    return (edges[1::2] - edges[::2]) * dt
+
+
+@pytest.mark.parametrize("eta, count", [(2.0, 1), (9.99, 1)])
+def test_stick_phases_match_the_reference_model(converged, eta, count):
+    s, run = converged[eta]
+    o = ssf.find_orbit(s, run)
+    d = ssf.stick_phases(s, o.points[0], o.T)
+    ref = _reference_stick_durations(s, o.points[0], o.T)
+    assert d.size == ref.size == count
+    # durations to two samples (T / 20000 each) against the independent integration
+    np.testing.assert_allclose(np.sort(d), np.sort(ref), atol=2.5 * o.T / 20000)
+    assert np.all(d > 0.05 * o.T)  # real stick phases, not flickers at the threshold
+
+
+def test_stick_phases_rejects_bad_input():
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    with pytest.raises(ValueError, match="T"):
+        ssf.stick_phases(s, np.zeros(4), -1.0)
+    with pytest.raises(ValueError, match="point"):
+        ssf.stick_phases(s, np.zeros(3), 1.0)
