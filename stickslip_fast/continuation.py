@@ -144,8 +144,9 @@ class Branch:
         ``multipliers_real`` / ``multipliers_imag`` (point, multiplier), ``stable``
         (point), ``stick_count`` / ``stick_time`` (point; orbit branches),
         ``bifurcation_kind`` / ``bifurcation_value`` / ``bifurcation_index``
-        (bifurcation), ``bifurcation_point`` (bifurcation, state); attributes ``kind = "branch"``, ``schema_version``, ``param``,
-        ``period``, ``status`` and ``system`` (JSON). Readable with
+        (bifurcation), ``bifurcation_point`` (bifurcation, state); attributes
+        ``kind = "branch"``, ``schema_version``, ``param``, ``period``, ``status``
+        and ``system`` (JSON). Readable with
         ``xarray.open_dataset(path, engine="h5netcdf", phony_dims="sort")``.
         """
         import h5py
@@ -770,7 +771,10 @@ def continue_orbit(
 
         for i, x in enumerate(xs):
             if math.isfinite(T[i]):
-                stick_count[i], stick_time[i] = geometry(x, T[i])
+                try:
+                    stick_count[i], stick_time[i] = geometry(x, T[i])
+                except ValueError:  # the orbit could not be sampled: left as not computed
+                    pass
         for i in range(len(xs) - 1):
             a, b = stick_count[i], stick_count[i + 1]
             if a >= 0 and b >= 0 and a != b:

@@ -96,3 +96,16 @@ def test_borrow_refuses_values_it_cannot_borrow():
 
     with pytest.raises(TypingError):
         f("text")
+
+
+def test_poll_flag_reads_the_first_entry_of_an_integer_flag():
+    from stickslip_fast.jit import poll_flag
+
+    @njit
+    def read(flag):
+        return poll_flag(flag)
+
+    assert read(np.array([3, 0], dtype=np.int64)) == 3
+    assert read(np.zeros(1, dtype=np.int64)) == 0
+    with pytest.raises(TypingError):
+        read(np.zeros(1))  # a float array is not a flag
