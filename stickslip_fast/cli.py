@@ -217,7 +217,7 @@ def _cmd_census(args: argparse.Namespace) -> int:
 
 
 def _cmd_continue(args: argparse.Namespace) -> int:
-    from .continuation import continue_equilibrium, continue_orbit, join_branches
+    from .continuation import continue_equilibrium, continue_orbit, join_branches, switch_branch
 
     cfg = _config_from_args(args)
     if cfg.continuation is None:
@@ -229,6 +229,7 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     param, bounds = c.pop("param"), c.pop("bounds")
     start = c.pop("start", "orbit")
     direction = c.pop("direction", 1.0)
+    switch = c.pop("switch", False)
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     if start == "orbit":
         first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
@@ -244,7 +245,33 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"file:      {args.output}  (branch)")
         print(branch.summary())
+    if switch:
+        _switch_and_follow(branch, bounds, c, args, say, switch_branch, continue_orbit)
     return 0
+
+
+def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, continue_orbit):
+    """[continue].switch: from each period-doubling of ``branch``, the doubled orbit's
+    branch, continued away from it, into OUTPUT's stem + ``.pd<k>.h5``."""
+    out = Path(args.output)
+    pds = [b for b in branch.bifurcations if b.kind == "period-doubling"]
+    if not pds:
+        say("switch: the branch has no period-doubling")
+    for k, pd in enumerate(pds, start=1):
+        say(f"switching at the period-doubling at {branch.param} = {pd.value:.10g} ...")
+        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10))
+        if not orbit.converged:
+            print(f"period-doubling {k} at {pd.value:.10g}: {orbit.message}", file=sys.stderr)
+            continue
+        value = getattr(orbit.system, branch.param)
+        away = 1.0 if value >= pd.value else -1.0
+        doubled = continue_orbit(orbit, branch.param, bounds, direction=away, **settings)
+        path = out.with_name(f"{out.stem}.pd{k}{out.suffix or '.h5'}")
+        doubled.to_hdf5(path)
+        if not args.quiet:
+            print(f"file:      {path}  (period-{orbit.period} branch from the "
+                  f"period-doubling at {pd.value:.10g})")  # fmt: skip
+            print(doubled.summary())
 
 
 def _orbit_from_config(cfg: RunConfig, param: str, period, say):

@@ -52,6 +52,7 @@ Layout (every section optional except what the command needs)::
     # period = 1          # default: the period the simulation finds
     direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
+    # switch = true       # also follow the doubled orbit from each period-doubling found
 
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
 """
@@ -98,7 +99,7 @@ _SECTIONS = {
     },
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
-        "max_points", "tol",
+        "max_points", "tol", "switch",
     },
 }  # fmt: skip
 
@@ -387,6 +388,12 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
                 raise ConfigError(f"[continue].{key} must be a number > 0, got {v!r}")
             out[key] = float(v)
+    if "switch" in table:
+        if not isinstance(table["switch"], bool):
+            raise ConfigError(f"[continue].switch must be true or false, got {table['switch']!r}")
+        if table["switch"] and out.get("start", "orbit") != "orbit":
+            raise ConfigError("[continue].switch applies to start = 'orbit' only")
+        out["switch"] = table["switch"]
     return out
 
 

@@ -298,3 +298,33 @@ def test_a_stick_phase_appearing_along_fig6_p2_is_located(tmp_path):
     old = Branch.from_hdf5(path)
     assert old.stick_count is None
     np.testing.assert_array_equal(old.bifurcations[0].point, br.points[i])
+
+
+def test_cli_continue_switches_at_the_period_doubling(tmp_path, capsys):
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "c.toml"
+    base = (
+        f'[system]\npreset = "asymmetric"\neta = {P2_ETA!r}\n'
+        f"[initial]\ny0 = {P2_POINT!r}\n"
+        '[integration]\nt_end = 3000.0\nstop = "converged"\n'
+        '[continue]\nparam = "eta"\nbounds = [5.0428, 5.0433]\ndirection = -1\n'
+        "ds = 2e-5\nds_min = 1e-9\nds_max = 4e-5\nmax_points = 8\n"
+    )
+    cfg.write_text(base + "switch = true\n")
+    out = tmp_path / "b.h5"
+    assert main(["continue", str(cfg), "-o", str(out)]) == 0
+    p2 = Branch.from_hdf5(out)
+    pd = [b for b in p2.bifurcations if b.kind == "period-doubling"]
+    assert p2.period == 2 and len(pd) == 1
+    p4 = Branch.from_hdf5(tmp_path / "b.pd1.h5")
+    # the doubled branch starts at the switched orbit, just above the period-doubling
+    assert p4.period == 4 and 0 < p4.values[0] - pd[0].value < 1e-5
+    assert not p4.stable[0] and np.all(np.diff(p4.values) > 0)
+    assert "b.pd1.h5" in capsys.readouterr().out
+    cfg.write_text(base + 'switch = "yes"\n')
+    assert main(["continue", str(cfg), "-o", str(out)]) == 2
+    assert "[continue].switch" in capsys.readouterr().err
+    cfg.write_text(base.replace("direction = -1", 'start = "sliding"') + "switch = true\n")
+    assert main(["continue", str(cfg), "-o", str(out)]) == 2
+    assert "[continue].switch" in capsys.readouterr().err
