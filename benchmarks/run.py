@@ -24,6 +24,7 @@ from benchmarks import (  # noqa: E402
     profile_kernel,
     startup,
     sweeps,
+    tableaus,
     work_precision,
 )
 from benchmarks.common import SWEEP_IMPL, machine_info  # noqa: E402
@@ -40,6 +41,7 @@ SECTIONS = (
     "peers_diagram",
     "kernel_profile",
     "converged_stopping",
+    "tableaus",
 )
 
 
@@ -100,6 +102,7 @@ def main(argv=None):
         ("peers_diagram", lambda: peer_diagram.run(mode, log)),
         ("kernel_profile", lambda: profile_kernel.run(mode, log)),
         ("converged_stopping", lambda: converged.run(mode, log)),
+        ("tableaus", lambda: tableaus.run(mode, log)),
     ]
     failed = []
     for name, fn in plan:

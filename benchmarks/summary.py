@@ -285,6 +285,8 @@ def write_summary(r):
         L += summary_peers.peers_diagram(sec["peers_diagram"])
     if "kernel_profile" in sec:
         L += summary_peers.kernel_profile(sec["kernel_profile"])
+    if "tableaus" in sec and sec["tableaus"].get("status") != "error":
+        L += summary_peers.tableaus(sec["tableaus"])
     for name, v in r["sections"].items():
         if v.get("status") == "error":
             L += [f"## {name}: FAILED", "", "```", v["traceback"], "```", ""]

@@ -222,6 +222,34 @@ def kernel_profile(pk) -> list[str]:
     return L
 
 
+def tableaus(tb) -> list[str]:
+    """The engine's Rosenbrock tableaus at matched accuracy (issue 11, part 2)."""
+    L = ["## Rosenbrock tableaus at matched accuracy (issue 11, part 2)", ""]
+    L.append(
+        "Each method at the first rtol of the ladder whose Poincare points are all within the "
+        "target of the SciPy Radau reference; best of the alternating rounds, one core. "
+        "'att' = accepted + rejected step attempts."
+    )
+    L.append("")
+    for key, case in tb["cases"].items():
+        for tgt, rows in case["tables"].items():
+            L.append(f"### {key}, Poincare error <= {tgt}")
+            L.append("")
+            L.append("| method | rtol | ms | steps | rejected | ns/att | speed-up vs rodas5p |")
+            L.append("|---|---|---|---|---|---|---|")
+            for m, r in rows.items():
+                if r.get("rtol") is None:
+                    L.append(f"| {m} | {r.get('note', 'n/a')} | | | | | |")
+                    continue
+                L.append(
+                    f"| {m} | {r['rtol']:g} | {_ms(r['time'])} | {r['steps']} | "
+                    f"{r['rejected']} | {r['ns_per_attempt']:.0f} | "
+                    f"{_x(r.get('speedup_vs_rodas5p'))} |"
+                )
+            L.append("")
+    return L
+
+
 def _n(x):
     return "n/a" if x is None else f"{x:.0f}"
 

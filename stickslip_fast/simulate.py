@@ -154,10 +154,13 @@ def simulate(
     y0 : array_like, optional
         Initial state in ``system.state_names`` order; default zeros
         (v_b(0) = 0 for the DC motor, as in the paper).
-    method : {"rodas5p", "dopri5", "dopri5-fixed"}
+    method : {"rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2"}
         ``"rodas5p"`` (default): L-stable Rosenbrock-Wanner, order 5(4), for the
         stiff sticking phases. ``"dopri5"``: adaptive Dormand-Prince 5(4) with PI
         control. ``"dopri5-fixed"``: Dormand-Prince with the fixed step ``h``.
+        ``"rodas4p"``, ``"rodas4p2"``: 6-stage Rosenbrock-Wanner 4(3) methods;
+        cheaper per step but slower than ``"rodas5p"`` at every accuracy
+        measured (docs/model.md).
     rtol, atol : float, optional
         Tolerances of the adaptive methods (defaults 1e-9 and 1e-11; rtol at most 1e-2).
     h : float, optional

@@ -1,7 +1,9 @@
 """Generic compiled steppers, one per method family, over any problem record.
 
 A *method* is a record of tableau arrays (:data:`RODAS5P_METHOD`,
-:data:`DOPRI5_METHOD`; the coefficients live in :mod:`stickslip_fast.tableaus`).
+:data:`RODAS4P_METHOD`, :data:`RODAS4P2_METHOD`, :data:`DOPRI5_METHOD`; the
+coefficients live in :mod:`stickslip_fast.tableaus`). The Rosenbrock records
+all have the same Numba type, so one compiled kernel serves every tableau.
 A *problem* is a record of :mod:`stickslip_fast.problems` (or
 :mod:`stickslip_fast.testproblems`): the steppers call only ``problem_f``,
 ``problem_jac``, ``problem_factor`` and ``problem_solve`` on it, which Numba
@@ -45,7 +47,7 @@ from .problems import (
     problem_jac,
     problem_solve,
 )
-from .tableaus import DOPRI5, RODAS5P
+from .tableaus import DOPRI5, RODAS4P, RODAS4P2, RODAS5P
 
 __all__ = [
     "DENSE_POLY",
@@ -53,6 +55,9 @@ __all__ = [
     "RosenbrockMethod",
     "ExplicitRKMethod",
     "RODAS5P_METHOD",
+    "RODAS4P_METHOD",
+    "RODAS4P2_METHOD",
+    "rosenbrock_method",
     "DOPRI5_METHOD",
     "StepWorkspace",
     "alloc_workspace",
@@ -81,10 +86,18 @@ RosenbrockMethod = namedtuple("RosenbrockMethod", ["gamma", "a", "C", "b", "b_er
 #: ``P`` (dense rows, stages) is the transpose of the tableau's ``dense``.
 ExplicitRKMethod = namedtuple("ExplicitRKMethod", ["A", "b", "b_err", "P", "q"])
 
-RODAS5P_METHOD = RosenbrockMethod(
-    float(RODAS5P.gamma), RODAS5P.a, RODAS5P.C, RODAS5P.b, RODAS5P.b_err, RODAS5P.H,
-    RODAS5P.embedded_order + 1.0,
-)  # fmt: skip
+
+def rosenbrock_method(tableau) -> RosenbrockMethod:
+    """The method record of a :class:`~stickslip_fast.tableaus.RosenbrockTableau`."""
+    return RosenbrockMethod(
+        float(tableau.gamma), tableau.a, tableau.C, np.ascontiguousarray(tableau.b),
+        np.ascontiguousarray(tableau.b_err), tableau.H, tableau.embedded_order + 1.0,
+    )  # fmt: skip
+
+
+RODAS5P_METHOD = rosenbrock_method(RODAS5P)
+RODAS4P_METHOD = rosenbrock_method(RODAS4P)
+RODAS4P2_METHOD = rosenbrock_method(RODAS4P2)
 DOPRI5_METHOD = ExplicitRKMethod(
     DOPRI5.A, DOPRI5.b, DOPRI5.b_err, np.ascontiguousarray(DOPRI5.dense.T), 5.0
 )

@@ -124,6 +124,25 @@ the ``RodasTableau`` constructor in swapped order; the values stored here are
 assigned by meaning and are verified by the ``c = alpha.sum(1)``,
 ``d = Gamma.sum(1)`` identities above in ``tests/test_tableaus.py``.)
 
+3. RODAS4P and RODAS4P2 -- Rosenbrock-Wanner 4(3), L-stable, stiffly accurate, 6 stages
+-------------------------------------------------------------------------------------------
+Same fields, same step and same interpolation formula as RODAS5P (section 2),
+with ``s = 6``: ``a[5, :] = a[4, :] + e_4``, so ``u_5`` is the embedded
+order-3 solution, ``y1 = u_5 + k[5]`` is of order 4 and ``err = k[5]``.  ``H``
+has two rows (no ``h_2`` term); the dense output is of order 3.  Both keep
+their order on the Prothero-Robinson problem (no order reduction for stiff
+problems), which is what the "P" stands for.  Julia stores ``C`` as 6x5; it
+is padded here with a zero last column, as for RODAS5P.
+
+Sources: G. Steinebach, "Order-reduction of ROW-methods for DAEs and method
+of lines applications", Preprint 1741, TU Darmstadt (1995) (Rodas4P), and
+G. Steinebach, "Improvement of Rosenbrock-Wanner method RODASP", in
+*Progress in Differential-Algebraic Equations II*, Springer (2020) 165-184
+(Rodas4P2).  The numbers are those of ``Rodas4PTableau`` and
+``Rodas4P2Tableau`` in the OrdinaryDiffEq.jl file named above; they are
+checked by ``tests/test_tableaus.py`` (the ``c``/``d`` identities, orders 4
+global, 3 embedded and 3 dense, L-stability).
+
 All arrays are C-contiguous ``float64`` and flagged read-only.
 """
 
@@ -139,6 +158,8 @@ __all__ = [
     "RosenbrockTableau",
     "DOPRI5",
     "RODAS5P",
+    "RODAS4P",
+    "RODAS4P2",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -513,3 +534,133 @@ RODAS5P = RosenbrockTableau(
     dense_order=4,
 )
 """Rodas5P (Steinebach 2023) in OrdinaryDiffEq.jl's transformed form."""
+
+
+# ---------------------------------------------------------------------------
+# Rodas4P (Steinebach 1995) and Rodas4P2 (Steinebach 2020), transformed form
+# ---------------------------------------------------------------------------
+
+_RODAS4P_A4 = [-7.170454962423024, -4.741636671481785, -16.31002631330971, -1.062004044111401]
+
+RODAS4P = RosenbrockTableau(
+    gamma=0.25,
+    a=_frozen(
+        [
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [1.831036793486759, 0.4955183967433795, 0.0, 0.0, 0.0, 0.0],
+            [2.304376582692669, -0.05249275245743001, -1.176798761832782, 0.0, 0.0, 0.0],
+            [*_RODAS4P_A4, 0.0, 0.0],
+            [*_RODAS4P_A4, 1.0, 0.0],
+        ]
+    ),
+    C=_frozen(
+        [
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [-12.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [-8.791795173947035, -2.207865586973518, 0.0, 0.0, 0.0, 0.0],
+            [10.81793056857153, 6.780270611428266, 19.53485944642410, 0.0, 0.0, 0.0],
+            [
+                34.19095006749676,
+                15.49671153725963,
+                54.74760875964130,
+                14.16005392148534,
+                0.0,
+                0.0,
+            ],
+            [
+                34.62605830930532,
+                15.30084976114473,
+                56.99955578662667,
+                18.40807009793095,
+                -5.714285714285717,
+                0.0,
+            ],
+        ]
+    ),
+    c=_frozen([0.0, 0.75, 0.21, 0.63, 1.0, 1.0]),
+    d=_frozen([0.25, -0.5, -0.023504, -0.0362, 0.0, 0.0]),
+    H=_frozen(
+        [
+            [25.09876703708589, 11.62013104361867, 28.49148307714626, -5.664021568594133, 0.0, 0.0],
+            [
+                1.638054557396973,
+                -0.7373619806678748,
+                8.477918219238990,
+                15.99253148779520,
+                -1.882352941176471,
+                0.0,
+            ],
+        ]
+    ),
+    order=4,
+    embedded_order=3,
+    dense_order=3,
+)
+"""Rodas4P (Steinebach 1995) in OrdinaryDiffEq.jl's transformed form."""
+
+_RODAS4P2_A4 = [7.089566927282776, 4.573591406461604, -8.423496976860259, -0.959280113459775]
+
+RODAS4P2 = RosenbrockTableau(
+    gamma=0.25,
+    a=_frozen(
+        [
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [0.906377755268814, -0.189707390391685, 0.0, 0.0, 0.0, 0.0],
+            [3.758617027739064, 1.161741776019525, -0.849258085312803, 0.0, 0.0, 0.0],
+            [*_RODAS4P2_A4, 0.0, 0.0],
+            [*_RODAS4P2_A4, 1.0, 0.0],
+        ]
+    ),
+    C=_frozen(
+        [
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [-12.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [-6.354581592719008, 0.338972550544623, 0.0, 0.0, 0.0, 0.0],
+            [-8.575016317114033, -7.606483992117508, 12.224997650124820, 0.0, 0.0, 0.0],
+            [
+                -5.888975457523102,
+                -8.157396617841821,
+                24.805546872612922,
+                12.790401512796979,
+                0.0,
+                0.0,
+            ],
+            [
+                -4.408651676063871,
+                -6.692003137674639,
+                24.625568527593117,
+                16.627521966636085,
+                -5.714285714285718,
+                0.0,
+            ],
+        ]
+    ),
+    c=_frozen([0.0, 0.75, 0.321448134013046, 0.519745732277726, 1.0, 1.0]),
+    d=_frozen([0.25, -0.5, -0.189532918363016, 0.085612108792769, 0.0, 0.0]),
+    H=_frozen(
+        [
+            [
+                -5.323528268423303,
+                -10.042123754867493,
+                17.175254928256965,
+                -5.079931171878093,
+                -0.016185991706112,
+                0.0,
+            ],
+            [
+                6.984505741529879,
+                6.914061169603662,
+                -0.849178943070653,
+                18.104410789349338,
+                -3.516963011559032,
+                0.0,
+            ],
+        ]
+    ),
+    order=4,
+    embedded_order=3,
+    dense_order=3,
+)
+"""Rodas4P2 (Steinebach 2020) in OrdinaryDiffEq.jl's transformed form."""

@@ -51,10 +51,17 @@ from .problems import (
     small_shape,
 )
 from .status import ST_ERROR, ST_NOT_COMPUTED, ST_OK
-from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, RosenbrockMethod, alloc_workspace
+from .steppers import (
+    DOPRI5_METHOD,
+    RODAS4P2_METHOD,
+    RODAS4P_METHOD,
+    RODAS5P_METHOD,
+    RosenbrockMethod,
+    alloc_workspace,
+)
 
-METHODS = ("rodas5p", "dopri5", "dopri5-fixed")
-M_RODAS5P, M_DOPRI5, M_DOPRI5_FIXED = range(3)
+METHODS = ("rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2")
+M_RODAS5P, M_DOPRI5, M_DOPRI5_FIXED, M_RODAS4P, M_RODAS4P2 = range(5)
 
 _JIT = JIT
 _PJIT = dict(parallel=True, cache=True, nogil=True, error_model="numpy")
@@ -247,6 +254,16 @@ def _run_alone(method, y0, p, n_osc, dc, variant, rs, obs, stop, y, istat, fstat
     )
 
 
+@njit(inline="always", **_JIT)
+def _rosenbrock(method: int) -> RosenbrockMethod:
+    """The Rosenbrock record of a method index: one type, so one compiled kernel for all."""
+    if method == M_RODAS4P:
+        return RODAS4P_METHOD
+    if method == M_RODAS4P2:
+        return RODAS4P2_METHOD
+    return RODAS5P_METHOD
+
+
 @njit(**_JIT)
 def integrate(
     method: int,
@@ -283,11 +300,11 @@ def integrate(
     istat = np.zeros(2, dtype=np.int64)
     fstat = np.zeros(2)
     args = (rs, obs, stop, y_end, istat, fstat, abort)
-    if method == M_RODAS5P:
-        status = _run_alone(RODAS5P_METHOD, y0, p, n_osc, dc, variant, *args)
-    else:
+    if method == M_DOPRI5 or method == M_DOPRI5_FIXED:
         # explicit steps gain nothing from the variant: one compiled kernel for all
         status = _run_alone(DOPRI5_METHOD, y0, p, n_osc, dc, (), *args)
+    else:
+        status = _run_alone(_rosenbrock(method), y0, p, n_osc, dc, variant, *args)
     stat_i[I_STEPS] = istat[0]
     stat_i[I_REJECTED] = istat[1]
     stat_i[I_CROSSINGS] = obs.counts[0]
@@ -377,10 +394,10 @@ def _lane_dispatch(
 ):  # fmt: skip
     head = (first, stride, count, y0s, chain, params, n_osc, dc)
     tail = (rs, max_points, points, t_points, ints, t_conv, final_state, abort)
-    if method == M_RODAS5P:
-        _lane_values(RODAS5P_METHOD, *head, variant, *tail)
-    else:
+    if method == M_DOPRI5 or method == M_DOPRI5_FIXED:
         _lane_values(DOPRI5_METHOD, *head, (), *tail)  # as in integrate()
+    else:
+        _lane_values(_rosenbrock(method), *head, variant, *tail)
 
 
 @njit(**_JIT)

@@ -45,7 +45,12 @@ def test_quick_benchmark_suite(tmp_path):
         "peers_diagram",
         "kernel_profile",
         "converged_stopping",
+        "tableaus",
     }
+    tb = sec["tableaus"]["cases"]["asymmetric_eta9.99"]["tables"]["1e-06"]
+    assert set(tb) == {"rodas5p", "rodas4p", "rodas4p2"}
+    # the 6-stage tableaus take more steps for the same accuracy (docs/model.md)
+    assert tb["rodas4p"]["steps"] > tb["rodas5p"]["steps"]
     conv = sec["converged_stopping"]
     # converged stopping on Fig. 6 gives the fixed window's status and period
     # (docs/converged.md: 100 of 100 values on this diagram)

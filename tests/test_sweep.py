@@ -39,11 +39,12 @@ def _quiet_no_orbit_warnings():
         yield
 
 
-def test_sweep_equals_simulate_bit_for_bit():
+@pytest.mark.parametrize("method", ["rodas5p", "rodas4p"])
+def test_sweep_equals_simulate_bit_for_bit(method):
     etas = np.array([1.7, 5.2, 6.6, 9.99])
-    res = sweep(ASYM, "eta", etas, **KW)
+    res = sweep(ASYM, "eta", etas, method=method, **KW)
     for i, eta in enumerate(etas):
-        one = ssf.simulate(ASYM.replace(eta=eta), **KW)
+        one = ssf.simulate(ASYM.replace(eta=eta), method=method, **KW)
         assert res.status[i] == one.status and res.period[i] == one.period
         k = res.count[i]
         assert k == len(one.t_poincare)

@@ -19,6 +19,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from stickslip_fast.tableaus import (  # noqa: E402
     DOPRI5,
+    RODAS4P,
+    RODAS4P2,
     RODAS5P,
     ExplicitRKTableau,
     RosenbrockTableau,
@@ -107,6 +109,17 @@ def ros_stability(z: Array, tab: RosenbrockTableau) -> Array:
         u = 1.0 + np.tensordot(tab.a[i, :i], k[:i], axes=1)
         k[i] = (z * u + np.tensordot(tab.C[i, :i], k[:i], axes=1)) / w
     return u + k[-1]
+
+
+def assert_a_stable(tab: RosenbrockTableau) -> None:
+    """|R(z)| <= 1 on the imaginary axis and on a sample of the open left half plane."""
+    w = np.concatenate([np.linspace(0.0, 1e4, 20001), np.logspace(-3, 4, 2001)])
+    assert np.max(np.abs(ros_stability(1j * w, tab))) <= 1.0 + 1e-12
+    r = np.logspace(-3, 8, 221)
+    phi = np.linspace(np.pi / 2, 3 * np.pi / 2, 181)
+    z = (r[:, None] * np.exp(1j * phi[None, :])).ravel()
+    z = z[z.real < 0]
+    assert np.max(np.abs(ros_stability(z, tab))) <= 1.0 + 1e-12
 
 
 def fitted_order(hs: Array, errs: Array | list[float]) -> float:
@@ -334,9 +347,11 @@ def test_rodas5p_structure() -> None:
     np.testing.assert_array_equal(tab.a[7], tab.a[6] + e[6])
 
 
-def test_rodas5p_c_and_d_are_consistent() -> None:
+@pytest.mark.parametrize(
+    "tab", [RODAS5P, RODAS4P, RODAS4P2], ids=["rodas5p", "rodas4p", "rodas4p2"]
+)
+def test_rosenbrock_c_and_d_are_consistent(tab: RosenbrockTableau) -> None:
     """c = rowsum(alpha), d = rowsum(Gamma) with Gamma = inv(I/gamma - C)."""
-    tab = RODAS5P
     gam = np.linalg.inv(np.eye(tab.n_stages) / tab.gamma - tab.C)
     alpha = tab.a @ gam
     np.testing.assert_allclose(alpha.sum(axis=1), tab.c, rtol=0, atol=1e-13)
@@ -346,38 +361,55 @@ def test_rodas5p_c_and_d_are_consistent() -> None:
 
 
 @pytest.mark.parametrize(
+    ("tab", "ns"),
+    [(RODAS5P, [20, 40, 80, 160]), (RODAS4P, [40, 80, 160, 320]), (RODAS4P2, [40, 80, 160, 320])],
+    ids=["rodas5p", "rodas4p", "rodas4p2"],
+)
+@pytest.mark.parametrize(
     ("f", "jac", "exact", "T"),
     [(osc_f, osc_jac, osc_exact, 5.0), (hopf_f, hopf_jac, hopf_exact, 2.0)],
     ids=["nonlinear-oscillator", "hopf"],
 )
-def test_rodas5p_global_order(
-    f: RHS, jac: Callable[[Array], Array], exact: Callable[[float], Array], T: float
+def test_rosenbrock_global_order(
+    tab: RosenbrockTableau,
+    ns: list[int],
+    f: RHS,
+    jac: Callable[[Array], Array],
+    exact: Callable[[float], Array],
+    T: float,
 ) -> None:
-    ns = np.array([20, 40, 80, 160])
+    ns = np.array(ns)
     errs = [
         np.linalg.norm(
-            integrate(lambda y, h: ros_step(f, jac, y, h, RODAS5P)[0], exact(0.0), T, n) - exact(T)
+            integrate(lambda y, h: ros_step(f, jac, y, h, tab)[0], exact(0.0), T, n) - exact(T)
         )
         for n in ns
     ]
     p = fitted_order(T / ns[1:], errs[1:])
-    assert abs(p - 5.0) < 0.3, (p, observed_orders(T / ns, errs))
+    assert abs(p - tab.order) < 0.3, (p, observed_orders(T / ns, errs))
 
 
-def test_rodas5p_prothero_robinson_autonomous_form() -> None:
-    """Mildly stiff (h*lam from -5 to -0.6), nonlinear in the state (y, t)."""
+@pytest.mark.parametrize(
+    ("tab", "ns"),
+    [(RODAS5P, [10, 20, 40, 80]), (RODAS4P, [20, 40, 80, 160]), (RODAS4P2, [20, 40, 80, 160])],
+    ids=["rodas5p", "rodas4p", "rodas4p2"],
+)
+def test_rosenbrock_prothero_robinson_autonomous_form(
+    tab: RosenbrockTableau, ns: list[int]
+) -> None:
+    """Mildly stiff (h*lam from -5 to -0.6), nonlinear in the state (y, t): no order reduction."""
     T = 1.0
-    ns = np.array([10, 20, 40, 80])
+    ns = np.array(ns)
     z0 = np.array([0.0, 0.0])  # y(0) = sin(0), t(0) = 0
     errs = [
         abs(
-            integrate(lambda z, h: ros_step(pr_aut_f, pr_aut_jac, z, h, RODAS5P)[0], z0, T, n)[0]
+            integrate(lambda z, h: ros_step(pr_aut_f, pr_aut_jac, z, h, tab)[0], z0, T, n)[0]
             - np.sin(T)
         )
         for n in ns
     ]
     p = fitted_order(T / ns[1:], errs[1:])
-    assert abs(p - 5.0) < 0.3, (p, observed_orders(T / ns, errs))
+    assert abs(p - tab.order) < 0.3, (p, observed_orders(T / ns, errs))
 
 
 def test_rodas5p_kaps_very_stiff_accuracy() -> None:
@@ -412,15 +444,7 @@ def test_rodas5p_stability_function() -> None:
     # Consistency near 0: R(z) = e^z + O(z^6).
     zs = np.array([1e-2, -1e-2, 1e-2j])
     assert np.max(np.abs(ros_stability(zs, tab) - np.exp(zs))) < 1e-12
-    # A-stability on the imaginary axis.
-    w = np.concatenate([np.linspace(0.0, 1e4, 20001), np.logspace(-3, 4, 2001)])
-    assert np.max(np.abs(ros_stability(1j * w, tab))) <= 1.0 + 1e-12
-    # Sample of the open left half plane.
-    r = np.logspace(-3, 8, 221)
-    phi = np.linspace(np.pi / 2, 3 * np.pi / 2, 181)
-    z = (r[:, None] * np.exp(1j * phi[None, :])).ravel()
-    z = z[z.real < 0]
-    assert np.max(np.abs(ros_stability(z, tab))) <= 1.0 + 1e-12
+    assert_a_stable(tab)
 
 
 def test_rodas5p_error_estimate_is_last_stage() -> None:
@@ -453,3 +477,49 @@ def test_rodas5p_dense_output() -> None:
     p = observed_orders(hs, errs)
     # Dense output of order 4: local error O(h^5).
     assert p[-1] >= 4.0 + 0.5, p
+
+
+# ---------------------------------------------------------------------------
+# Rodas4P and Rodas4P2: 6 stages, orders 4 (solution), 3 (embedded), 3 (dense)
+# ---------------------------------------------------------------------------
+
+RODAS4 = pytest.mark.parametrize("tab", [RODAS4P, RODAS4P2], ids=["rodas4p", "rodas4p2"])
+
+
+@RODAS4
+def test_rodas4_structure(tab: RosenbrockTableau) -> None:
+    s = tab.n_stages
+    assert s == 6
+    assert tab.a.shape == (s, s) and tab.C.shape == (s, s) and tab.H.shape == (2, s)
+    assert (tab.order, tab.embedded_order, tab.dense_order) == (4, 3, 3)
+    assert tab.gamma == 0.25
+    for arr in (tab.a, tab.C, tab.c, tab.d, tab.H):
+        assert arr.dtype == np.float64 and not arr.flags.writeable
+    assert np.all(np.triu(tab.a) == 0.0) and np.all(np.triu(tab.C) == 0.0)
+    np.testing.assert_array_equal(tab.a[5], tab.a[4] + np.eye(s)[4])  # stiffly accurate
+
+
+@RODAS4
+def test_rodas4_error_estimate_and_dense_output(tab: RosenbrockTableau) -> None:
+    """err = k_5 is O(h^4) (embedded order 3); the dense output is of order 3, exact at the ends."""
+    t0 = 0.4
+    y0 = hopf_exact(t0)
+    y1, _, k = ros_step(hopf_f, hopf_jac, y0, 0.1, tab)
+    np.testing.assert_array_equal(ros_dense(y0, y1, k, tab, 1.0), y1)
+    np.testing.assert_array_equal(ros_dense(y0, y1, k, tab, 0.0), y0)
+    hs = 0.2 / 2.0 ** np.arange(5)
+    est, dense = [], []
+    for h in hs:
+        y1, err, k = ros_step(hopf_f, hopf_jac, y0, h, tab)
+        est.append(np.linalg.norm(err))
+        dense.append(np.linalg.norm(ros_dense(y0, y1, k, tab, 0.5) - hopf_exact(t0 + 0.5 * h)))
+    assert abs(observed_orders(hs, est)[-1] - 4.0) < 0.3
+    assert abs(observed_orders(hs, dense)[-1] - 4.0) < 0.3
+
+
+@RODAS4
+def test_rodas4_stability_function(tab: RosenbrockTableau) -> None:
+    assert abs(ros_stability(np.array([-1e12]), tab)[0]) < 1e-10  # L-stable
+    zs = np.array([1e-2, -1e-2, 1e-2j])
+    assert np.max(np.abs(ros_stability(zs, tab) - np.exp(zs))) < 1e-10  # e^z + O(z^5)
+    assert_a_stable(tab)
