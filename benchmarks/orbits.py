@@ -9,10 +9,12 @@ time is the minimum over ``--repeat`` runs. Prints one JSON line per case.
 
 ``--branch``: the full-branch cost (issue 10, sec. 6), side by side in one run: the period-1
 orbit of Fig. 6 continued from eta = 2.0 in both directions over [1, 10] (``continue_orbit``,
-ds 0.02, ds_max 0.05: it ends where the corrector stops at the branch's sharp ends), steady
-sliding over [1, 10] (``continue_equilibrium``), and the 1000-value fixed-window Fig. 6 sweep
-on all cores (t_end 3000 / t_transient 2000). One run each (the sweep and the branch are
-minutes, not milliseconds).
+ds 0.02, ds_max 0.05), once with ``sharp_ends=False`` (the stable part: it ends where the
+default corrector stops, just short of the folds) and once with the default
+``sharp_ends=True`` (through both folds and along the unstable sides to the precision
+limit, docs/limits.md), steady sliding over [1, 10] (``continue_equilibrium``), and the
+1000-value fixed-window Fig. 6 sweep on all cores (t_end 3000 / t_transient 2000). One run
+each (the sweep and the branches are seconds to a minute, not milliseconds).
 """
 
 from __future__ import annotations
@@ -50,16 +52,20 @@ def branch_cost() -> dict:
     orbit = ssf.find_orbit(s, ssf.simulate(s, 3000.0, stop="converged"))
     ssf.continue_orbit(orbit, "eta", (1.9, 2.1), max_points=3)  # warm-up
     out: dict = {}
-    t0 = time.perf_counter()
-    pts = 0
-    for d in (-1.0, 1.0):
-        b = ssf.continue_orbit(orbit, "eta", (1.0, 10.0), ds=0.02, ds_max=0.05, direction=d)
-        pts += b.values.size
-        out[f"p1_{'down' if d < 0 else 'up'}"] = dict(
-            points=int(b.values.size), end=float(b.values[-1]), status=b.status
-        )
-    out["p1_branch_s"] = time.perf_counter() - t0
-    out["p1_points"] = pts
+    for sharp, tag in ((False, "p1_stable"), (True, "p1_through_folds")):
+        t0 = time.perf_counter()
+        pts = 0
+        for d in (-1.0, 1.0):
+            b = ssf.continue_orbit(
+                orbit, "eta", (1.0, 10.0), ds=0.02, ds_max=0.05, direction=d, sharp_ends=sharp
+            )
+            pts += b.values.size
+            out[f"{tag}_{'down' if d < 0 else 'up'}"] = dict(
+                points=int(b.values.size), end=float(b.values[-1]), status=b.status,
+                folds=[x.value for x in b.bifurcations if x.kind == "fold"],
+            )  # fmt: skip
+        out[f"{tag}_s"] = time.perf_counter() - t0
+        out[f"{tag}_points"] = pts
     t0 = time.perf_counter()
     e = ssf.find_equilibrium(s, "sliding")
     for d in (-1.0, 1.0):
@@ -70,7 +76,8 @@ def branch_cost() -> dict:
     ssf.sweep(ssf.System.preset("asymmetric"), "eta", np.linspace(1.0, 10.0, 1000), t_end=3000.0,
               t_transient=2000.0, max_points=256, progress=False)  # fmt: skip
     out["fig6_sweep_1000_s"] = time.perf_counter() - t0
-    out["branch_over_sweep"] = out["p1_branch_s"] / out["fig6_sweep_1000_s"]
+    for tag in ("p1_stable", "p1_through_folds"):
+        out[f"{tag}_over_sweep"] = out[f"{tag}_s"] / out["fig6_sweep_1000_s"]
     return out
 
 

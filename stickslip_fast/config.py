@@ -53,6 +53,7 @@ Layout (every section optional except what the command needs)::
     direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
     # switch = true       # also follow the doubled orbit from each period-doubling found
+    # sharp_ends = false  # do not retry with tighter settings where the corrector fails
 
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
 """
@@ -99,7 +100,7 @@ _SECTIONS = {
     },
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
-        "max_points", "tol", "switch",
+        "max_points", "tol", "switch", "sharp_ends",
     },
 }  # fmt: skip
 
@@ -394,6 +395,13 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
         if table["switch"] and out.get("start", "orbit") != "orbit":
             raise ConfigError("[continue].switch applies to start = 'orbit' only")
         out["switch"] = table["switch"]
+    if "sharp_ends" in table:
+        v = table["sharp_ends"]
+        if not isinstance(v, bool):
+            raise ConfigError(f"[continue].sharp_ends must be true or false, got {v!r}")
+        if out.get("start", "orbit") != "orbit":
+            raise ConfigError("[continue].sharp_ends applies to start = 'orbit' only")
+        out["sharp_ends"] = v
     return out
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,12 +46,29 @@ __all__ = [
     "pseudo_arclength",
     "switch_branch",
     "BRANCH_SCHEMA",
+    "SHARP_END_STAGES",
 ]
 
 #: Version of the HDF5 layout written by :meth:`Branch.to_hdf5`.
 BRANCH_SCHEMA = 2
 #: Older schemas this version still reads (see :meth:`Branch.from_hdf5`).
 READABLE_BRANCH_SCHEMAS = (1, 2)
+
+#: Tighter settings :func:`continue_orbit` goes on with, in turn, where the corrector fails
+#: at ``ds_min`` (``sharp_ends=True``): (tol, rtol, atol, ds_min). The sharp ends of
+#: Fig. 6's period-1 branch are folds narrower than the defaults resolve (docs/limits.md):
+#: at eta = 3.3236646195 the branch turns within ~1.5e-9 in arclength (below ds_min = 1e-8)
+#: and its parameter moves ~1e-8 there, the residual's tol 1e-10 over dP/deta ~ 0.01; at
+#: eta = 1.8430158079 the turn is ~2e-11 in eta and the map's integration noise at
+#: rtol 1e-11 (~5e-14) matters too.
+SHARP_END_STAGES: tuple[tuple[float, float, float, float], ...] = (
+    (1e-13, 1e-11, 1e-13, 1e-14),
+    (1e-14, 1e-13, 1e-15, 1e-16),
+)
+
+#: A branch ends with status "precision-limit" where its last this many steps together
+#: advance less than the ``ds_min`` given (possible only in the tighter stages).
+STALL_WINDOW = 10
 
 # evaluate(x) -> (ok, G (m,), DG (m, m + 1), A (m, m)): residual, its Jacobian in (z, lambda),
 # and the map's Jacobian in z (whose eigenvalues are the multipliers)
@@ -115,8 +132,11 @@ class Branch:
     bifurcations : list of Bifurcation
     status : str
         Why the branch ended: "bounds" (the last point lies on one of them),
-        "max-points", "step-too-small" (the corrector failed at ds_min)
-        or "nonsmooth" (a section grazing, recorded in ``bifurcations``).
+        "max-points", "step-too-small" (the corrector failed at ds_min),
+        "nonsmooth" (a section grazing, recorded in ``bifurcations``) or
+        "precision-limit" (past a sharp end, in the tighter stages of
+        ``sharp_ends``: the steps crawl because Newton's reach has shrunk to
+        the integration's precision).
     stick_count : ndarray of int, shape (k,), optional
         Stick phases per period at each point (all disks together; -1 where not
         computed). None for equilibria.
@@ -411,6 +431,7 @@ def pseudo_arclength(
     jump: Callable[[np.ndarray, np.ndarray], bool] | None = None,
     tests: Callable[[np.ndarray, np.ndarray], dict[str, float]] = _tests,
     spectrum: Callable[[np.ndarray], np.ndarray] | None = None,
+    refine: Sequence[tuple[Evaluator, float, float]] = (),
 ):
     """Follow G(x) = 0, x = (z, lambda), by pseudo-arclength continuation.
 
@@ -450,14 +471,26 @@ def pseudo_arclength(
         period-doubling / Neimark-Sacker; equilibria use fold / Hopf).
     spectrum : callable, optional
         A -> the eigenvalues recorded per point (default: by modulus, largest first).
+    refine : sequence of (evaluate, tol, ds_min)
+        Tighter settings to go on with, in turn, where the corrector fails at
+        ``ds_min`` (not where the steps jump off the branch): the last point is
+        corrected again with the next stage's evaluator and ``tol`` (or, if
+        that fails, one of the few before it: :func:`_restart`; the points after
+        it are dropped), and the continuation resumes from it with
+        ``ds = ds_min`` and the stage's smaller ``ds_min``. The branch ends when
+        no stage is left (or no recent point can be corrected with it). For sharp folds whose turn is
+        narrower than ``ds_min`` or whose parameter extent is below ``tol`` over
+        the residual's sensitivity to lambda (docs/limits.md).
 
     Returns
     -------
     xs, mults, bifs, status
         The points (k, m + 1), their multipliers (k, m), the located
         bifurcations (kind, lambda, index, x) and the reason the branch ended:
-        "bounds", "max-points", "step-too-small" (the corrector failed) or
-        "nonsmooth" (steps kept jumping off the branch).
+        "bounds", "max-points", "step-too-small" (the corrector failed),
+        "nonsmooth" (steps kept jumping off the branch) or "precision-limit"
+        (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
+        less than ``ds_min``).
     """
     ok, G, DG, A = evaluate(x0)
     if not ok:
@@ -474,6 +507,8 @@ def pseudo_arclength(
     bifs: list[tuple[str, float, int, np.ndarray]] = []
     lo, hi = bounds
     status = "max-points"
+    stages = list(refine)
+    ds_min_given = ds_min
     while len(xs) < max_points:
         x = xs[-1]
         accepted = False
@@ -504,8 +539,24 @@ def pseudo_arclength(
                     break
             ds *= 0.5
         if not accepted:
-            status = "nonsmooth" if jumped else "step-too-small"
-            break
+            restart = None
+            while not jumped and stages and restart is None:
+                # a sharp end: correct a recent point again with tighter settings, go on
+                evaluate, tol, ds_min_next = stages.pop(0)
+                restart = _restart(evaluate, xs, tol, max_corrector)
+                if restart is not None:
+                    ds, ds_min = ds_min, min(ds_min, ds_min_next)
+            if restart is None:
+                status = "nonsmooth" if jumped else "step-too-small"
+                break
+            j, x_re, (_, DG, A) = restart
+            t = _tangent(DG, xs[j] - xs[j - 1] if j > 0 else t)
+            del xs[j + 1 :], mults[j + 1 :], tests[j + 1 :]
+            xs[j] = x_re
+            mults[j] = spectrum(A)
+            tests[j] = test_fn(A, t)
+            bifs = [b for b in bifs if b[2] < j]
+            continue
         G, DG, A = data
         t_new = _tangent(DG, t)
         te = test_fn(A, t_new)
@@ -523,9 +574,40 @@ def pseudo_arclength(
         if on_bound:
             status = "bounds"
             break
+        if len(xs) > STALL_WINDOW:
+            # only the tighter stages take steps below ds_min: a crawl there means that
+            # Newton's reach has shrunk to the integration's precision (docs/limits.md)
+            last = np.asarray(xs[-STALL_WINDOW - 1 :])
+            if np.linalg.norm(np.diff(last, axis=0), axis=1).sum() < ds_min_given:
+                status = "precision-limit"
+                break
         if its <= 3:
             ds = min(ds * 1.5, ds_max)
     return np.array(xs), np.array(mults), bifs, status
+
+
+def _restart(
+    evaluate: Evaluator, xs: list[np.ndarray], tol: float, max_corrector: int, back: int = 6
+) -> tuple[int, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
+    """A recent branch point corrected again (with ``evaluate`` and ``tol``), or None.
+
+    Tries the last ``back`` points, newest first, each on the hyperplane through it
+    normal to the chord from its predecessor, then with lambda fixed; a result is
+    kept if it lies closer to the old point than half that chord (the same branch).
+    A point computed to a looser tolerance near a sharp fold can lie past the fold
+    (its lambda off by ~tol / |dG/dlambda|), where neither has a solution: the
+    search then goes back along the branch. Returns (index, point, (G, DG, A)).
+    """
+    e_lam = np.zeros_like(xs[-1])
+    e_lam[-1] = 1.0
+    for j in range(len(xs) - 1, max(len(xs) - 1 - back, -1), -1):
+        chord = xs[j] - xs[j - 1] if j > 0 else e_lam
+        reach = 0.5 * float(np.linalg.norm(chord)) if j > 0 else math.inf
+        for normal in (chord / np.linalg.norm(chord), e_lam):
+            okc, x, data, _ = _correct(evaluate, xs[j], normal, xs[j], tol, max_corrector)
+            if okc and np.linalg.norm(x - xs[j]) <= reach:
+                return j, x, data
+    return None
 
 
 def _sorted_eigs(A):
@@ -610,14 +692,23 @@ def _check_args(system, what, param, bounds, ds, ds_min, ds_max, tol, max_points
     return lam0, lo, hi
 
 
-def _orbit_evaluator(system0, param: str, p: int, rtol: float, atol: float, fd_step: float):
+def _orbit_evaluator(
+    system0,
+    param: str,
+    p: int,
+    rtol: float,
+    atol: float,
+    fd_step: float,
+    periods: dict[bytes, float] | None = None,
+):
     """The residual G(z, lambda) = P^p(z) - z of an orbit branch, and its helpers.
 
     Returns ``(evaluate, full, system_at, periods)``: ``evaluate(x)`` for
     :func:`pseudo_arclength` (x = section coordinates and lambda; the map's
     Jacobian in z from the variational equations, d/dlambda by a central
     difference), ``full(x)`` the state on the section, ``system_at(lam)`` and
-    ``periods`` (the return time of every evaluated x, keyed by its bytes).
+    ``periods`` (the return time of every evaluated x, keyed by its bytes; pass
+    a dict to share it between evaluators of different tolerances).
     """
     n = system0.n_state
     mask = np.arange(n) != SECTION_INDEX
@@ -632,7 +723,8 @@ def _orbit_evaluator(system0, param: str, p: int, rtol: float, atol: float, fd_s
         return dataclasses.replace(system0, **{param: float(lam)})
 
     cache: dict[bytes, Any] = {}
-    periods: dict[bytes, float] = {}
+    if periods is None:
+        periods = {}
 
     def evaluate(x):
         key = x.tobytes()
@@ -682,6 +774,7 @@ def continue_orbit(
     atol: float = 1e-13,
     fd_step: float = 1e-7,
     stick_events: bool = True,
+    sharp_ends: bool = True,
 ) -> Branch:
     """Continue a periodic orbit in one parameter (pseudo-arclength).
 
@@ -713,6 +806,15 @@ def continue_orbit(
         ``stick_time``; :func:`~stickslip_fast.orbits.stick_phases`) and locate
         every change of their number between two points (bisection on the
         branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
+    sharp_ends : bool
+        Where the corrector fails at ``ds_min``, go on with the tighter
+        settings of :data:`SHARP_END_STAGES` in turn (corrector tolerance,
+        integration tolerances, smallest step; each only where tighter than the
+        ones given), from the last point corrected again with them. This passes
+        folds narrower than the defaults resolve, e.g. both ends of Fig. 6's
+        period-1 branch (docs/limits.md). The branch keeps the tighter settings
+        from there on; ``T`` and the points are those of the stage that
+        computed them.
 
     Returns
     -------
@@ -743,11 +845,21 @@ def continue_orbit(
         f = _field(system_at(x_new[-1]), full(x_new))
         return bool(np.max(np.abs(f)) < EQUILIBRIUM_SPEED)
 
+    refine = []
+    if sharp_ends:
+        cur = (tol, rtol, atol, ds_min)
+        for stage in SHARP_END_STAGES:
+            nxt = tuple(min(a, b) for a, b in zip(cur, stage))
+            if nxt != cur:
+                ev, _, _, _ = _orbit_evaluator(system0, param, p, nxt[1], nxt[2], fd_step,
+                                               periods)  # fmt: skip
+                refine.append((ev, nxt[0], nxt[3]))
+                cur = nxt
     x0 = np.r_[orbit.points[0][mask], lam0]
     evaluate(x0)
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, jump=jump,
+        max_points=max_points, tol=tol, jump=jump, refine=refine,
     )  # fmt: skip
     if status == "nonsmooth":
         # the fixed point of P^p ends: its return time jumps (a crossing of the section

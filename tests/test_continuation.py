@@ -55,6 +55,25 @@ def test_fold_is_passed_and_the_branch_returns_on_the_unstable_side():
     assert np.all(after < 0) and np.all(np.abs(mults[idx + 1 :, 0]) > 1)
 
 
+def test_tighter_stages_pass_a_fold_the_first_evaluator_cannot_resolve():
+    """``refine``: where the corrector fails at ds_min, go on with the next evaluator."""
+
+    def blind(x):  # cannot evaluate near the fold (wider than ds_max), like a too-loose tol
+        return (False, *fold_pd_map(x)[1:]) if abs(x[0]) < 0.2 else fold_pd_map(x)
+
+    start = np.array([0.5, 0.0, 0.25])
+    kw = dict(KW, ds_min=1e-4)
+    xs, _, bifs, status = pseudo_arclength(blind, start, -1.0, (-1.0, 1.5), **kw)
+    assert status == "step-too-small" and not bifs and np.all(xs[:, 0] > 0)
+    xs, mults, bifs, status = pseudo_arclength(
+        blind, start, -1.0, (-1.0, 1.5), refine=[(fold_pd_map, 1e-12, 1e-8)], **kw
+    )
+    assert status == "bounds" and [b[0] for b in bifs] == ["fold"]
+    assert abs(bifs[0][1]) < 1e-8
+    assert xs[-1, 0] < -1.0 and np.abs(mults[-1, 0]) > 1
+    np.testing.assert_allclose(xs[:, 0] ** 2, xs[:, 2], atol=1e-10)
+
+
 def test_period_doubling_is_located():
     xs, mults, bifs, status = pseudo_arclength(
         fold_pd_map, np.array([0.5, 0.0, 0.25]), 1.0, (-1.0, 1.5), **KW
@@ -177,6 +196,14 @@ def test_cli_continue_errors_name_the_problem(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "no periodic orbit" in err and "'equilibrium'" in err
     assert not (tmp_path / "b.h5").exists()
+    cfg.write_text('[continue]\nparam = "eta"\nbounds = [1.9, 2.1]\nsharp_ends = "yes"\n')
+    assert main(["continue", str(cfg), "-o", str(tmp_path / "b.h5")]) == 2
+    assert "[continue].sharp_ends" in capsys.readouterr().err
+    cfg.write_text(
+        '[continue]\nparam = "eta"\nbounds = [1.9, 2.1]\nstart = "sliding"\nsharp_ends = false\n'
+    )
+    assert main(["continue", str(cfg), "-o", str(tmp_path / "b.h5")]) == 2
+    assert "[continue].sharp_ends applies to start = 'orbit'" in capsys.readouterr().err
 
 
 def fold_pd_map_twice(x):
@@ -328,3 +355,27 @@ def test_cli_continue_switches_at_the_period_doubling(tmp_path, capsys):
     cfg.write_text(base.replace("direction = -1", 'start = "sliding"') + "switch = true\n")
     assert main(["continue", str(cfg), "-o", str(out)]) == 2
     assert "[continue].switch" in capsys.readouterr().err
+
+
+#: A point of Fig. 6's period-1 orbit close to its upper end (continued from eta = 2.0).
+P1_END_ETA = 3.323602439463245
+P1_END_POINT = [0.0725923842670777, 0.0, 0.12216897433548599, -0.006665698398121293]
+
+
+def test_the_sharp_upper_end_of_fig6_p1_is_a_fold_and_is_passed():
+    s = ssf.System.preset("asymmetric", eta=P1_END_ETA)
+    o = ssf.find_orbit(s, np.array(P1_END_POINT), period=1)
+    assert o.converged and o.stable and 0.0 < o.multipliers[0].real < 0.1
+    br = continue_orbit(o, "eta", (3.32, 3.33), ds=1e-5, ds_max=1e-4, max_points=45,
+                        stick_events=False)  # fmt: skip
+    folds = [b for b in br.bifurcations if b.kind == "fold"]
+    assert len(folds) == 1 and abs(folds[0].value - 3.3236646195) < 2e-10
+    # past the fold: the same orbit, unstable (a real multiplier > 1), at lower eta
+    k = folds[0].index
+    assert br.stable[k - 1] and not br.stable[-1]
+    assert br.multipliers[-1, 0].real > 1.5 and br.values[-1] < folds[0].value - 1e-7
+    assert np.all(np.abs(br.T - o.T) < 1e-3)
+    # without the tighter stages the corrector stops short of the fold
+    short = continue_orbit(o, "eta", (3.32, 3.33), ds=1e-5, ds_max=1e-4, max_points=45,
+                           stick_events=False, sharp_ends=False)  # fmt: skip
+    assert short.status == "step-too-small" and np.all(short.stable)
