@@ -3,7 +3,8 @@
 For each sweep config: a 50-value grid over its own range (each axis of a 2-D
 sweep gets 7 values), with the config's integration settings and mode. For each
 single-run config: the run itself (points, samples, final state). Also a
-Lyapunov exponent on two presets. Everything goes into one ``.npz`` file;
+Lyapunov exponent on two presets, and periodic orbits with their multipliers
+(``--only orbits``). Everything goes into one ``.npz`` file;
 ``--compare OLD.npz`` then reports, array by array, whether the new results
 are bit-identical and the largest difference where they are not.
 
@@ -77,6 +78,40 @@ def snapshot(only: str | None = None) -> dict[str, np.ndarray]:
             out[f"{key}/n_steps"] = np.array([lr.n_steps, lr.n_rejected])
             out[f"{key}/final_state"] = lr.final_state
         print("lyapunov: done", file=sys.stderr, flush=True)
+    if not only or "orbits" in only:
+        out.update(_orbits())
+        print("orbits: done", file=sys.stderr, flush=True)
+    return out
+
+
+def _orbits() -> dict[str, np.ndarray]:
+    """Newton solves, multipliers, a short continuation and a DC-motor Lyapunov exponent.
+
+    These run the tangent problem (the variational equations) for one and two
+    disks, constant belt and DC motor.
+    """
+    out: dict[str, np.ndarray] = {}
+    cases = (
+        ("fig06_asymmetric_constant.toml", 2.0),
+        ("fig06_asymmetric_constant.toml", 9.99),
+        ("fig12_asymmetric_dcmotor.toml", 3.0),
+        ("fig16_asymmetric_dcmotor_N2.toml", 1.5),
+    )
+    for name, eta in cases:
+        system = load_config(ROOT / "data" / name).system.replace(eta=eta)
+        orbit = ssf.find_orbit(system, ssf.simulate(system, 4000.0, stop="converged"))
+        key = f"orbit_{Path(name).stem}_{eta}"
+        out[f"{key}/points"] = orbit.points
+        out[f"{key}/T"] = np.array([orbit.T, orbit.residual, orbit.iterations])
+        out[f"{key}/multipliers"] = orbit.multipliers
+        out[f"{key}/status"] = np.array(orbit.status)
+        if name.startswith("fig06") and eta == 2.0:
+            branch = ssf.continue_orbit(orbit, "eta", (1.9, 2.2), ds=0.02, max_points=6)
+            out[f"{key}/branch_values"] = branch.values
+            out[f"{key}/branch_multipliers"] = branch.multipliers
+        if name.startswith("fig12"):
+            lr = ssf.largest_lyapunov(system, 1500, 500)
+            out[f"{key}/lyapunov"] = np.array([lr.exponent, lr.exponent_fit, lr.n_steps])
     return out
 
 

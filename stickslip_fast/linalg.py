@@ -195,6 +195,9 @@ def bordered_matvec(
         out[nb] = acc + corner * uvb
 
 
+bordered_matvec_inline = njit(**_INLINE)(bordered_matvec.py_func)
+
+
 # ------------------------------------------------------------- dense (test problems)
 @njit(**_JIT)
 def dense_w_factor(sigma: float, jac: np.ndarray, lu: np.ndarray, piv: np.ndarray) -> bool:

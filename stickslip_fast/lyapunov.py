@@ -43,10 +43,11 @@ from .driver import (
 from .interrupt import call_interruptible, new_abort_flag
 from .jit import JIT, OVERLOAD, is_record
 from .params import N_PARAMS
-from .problems import alloc_bordered_linear, make_tangent
-from .status import STATUS_NAMES
+from .problems import alloc_bordered_linear, make_tangent, tangent_variant
+from .status import ST_ERROR, STATUS_NAMES
 from .steppers import RODAS5P_METHOD, alloc_workspace
 from .system import System
+from .trajectory import kernel_variant, variant_matches
 
 __all__ = ["LyapunovResult", "LyapunovObserver", "largest_lyapunov", "lyapunov_kernel"]
 
@@ -151,6 +152,7 @@ def lyapunov_kernel(
     p: np.ndarray,
     n_osc: int,
     dc: bool,
+    variant: tuple,
     t_end: float,
     t_transient: float,
     rtol: float,
@@ -175,10 +177,14 @@ def lyapunov_kernel(
     averaging starts), then at step ends at least ``renorm_dt`` apart,
     recording (t, running estimate) into ``conv_t``/``conv_est``. Outputs:
     ``stats`` = (steps, rejected, records), ``fstats`` = (exponent, t_start,
-    t_final, log-growth sum), ``y_end``.
+    t_final, log-growth sum), ``y_end``. ``variant`` selects the kernel as in
+    :func:`~stickslip_fast.variational.propagate_tangents`.
     """
     n = y0.size
-    prob = make_tangent(p, n_osc, dc, 1, tangent_atol, np.empty(N_PARAMS))
+    fstats[0] = math.nan
+    if not variant_matches(variant, n_osc, dc):
+        return ST_ERROR
+    prob = tangent_variant(make_tangent(p, n_osc, dc, 1, tangent_atol, np.empty(N_PARAMS)), variant)
     y = np.empty(2 * n)
     for i in range(n):
         y[i] = y0[i]
@@ -349,7 +355,7 @@ def largest_lyapunov(
     code = call_interruptible(
         lyapunov_kernel,
         y_init, u_init, system.to_array(), system.n_oscillators, system.is_dc_motor,
-        float(t_end), float(t_transient), float(rtol), float(atol), tangent_atol,
+        kernel_variant(system.n_oscillators, system.is_dc_motor), float(t_end), float(t_transient), float(rtol), float(atol), tangent_atol,
         float(renorm_dt), int(max_steps), conv_t, conv_est, y_end, stats, fstats, abort=abort,
     )  # fmt: skip
     runtime = time.perf_counter() - t0

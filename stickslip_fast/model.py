@@ -50,6 +50,8 @@ __all__ = [
     "jacobian_blocks",
     "jacobian_vector",
     "second_derivative_form",
+    "second_partials_at",
+    "second_derivative_form_at",
     "tangent_rhs",
     "dense_jacobian",
 ]
@@ -239,6 +241,15 @@ def jacobian_vector(
     bordered_matvec(blocks, border_col, border_row, corner, n_osc, dc, u, out)
 
 
+@njit(inline="always", **_JIT)
+def _d2_disk(t_vv, t_vw, t_ww, m_vv, m_vw, m_ww, a1, b1, a2, b2):
+    """One disk's (D^2 T_s, D^2 M_s)[(a1, b1), (a2, b2)] in (slip, spin)."""
+    cross = a1 * b2 + b1 * a2
+    d2t = t_vv * a1 * a2 + t_vw * cross + t_ww * b1 * b2
+    d2m = m_vv * a1 * a2 + m_vw * cross + m_ww * b1 * b2
+    return d2t, d2m
+
+
 @njit(**_JIT)
 def second_derivative_form(
     y: np.ndarray,
@@ -253,28 +264,61 @@ def second_derivative_form(
 
     This is H(y, u) v = d/ds [J(y + s v) u] at s = 0, the lower-left block of the
     Jacobian of the variational system. Only the friction terms are nonlinear,
-    so only the dx, dphi (and v_b) rows are nonzero.
+    so only the dx, dphi (and v_b) rows are nonzero. (Allocates; the tangent
+    problem uses :func:`second_partials_at` once per step and
+    :func:`second_derivative_form_at` per (u, v).)
     """
-    mu = p[P_MU]
+    d2 = np.empty((n_osc, 6))
+    second_partials_at(y, p, n_osc, dc, d2)
+    second_derivative_form_at(d2, u, v, p, n_osc, dc, out)
+
+
+@njit(**_JIT)
+def second_partials_at(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool, d2: np.ndarray) -> None:
+    """Each disk's :func:`friction_second_partials` at y into ``d2`` (N, 6).
+
+    With :func:`second_derivative_form_at` this is :func:`second_derivative_form`
+    (bit for bit) for many (u, v) at one y: the tangent problem's solves need k
+    forms per stage at the step's start.
+    """
     eps = p[P_EPS]
     etap = p[P_ETAP]
-    inv_m = 1.0 / p[P_M]
     vb = y[4 * n_osc] if dc else p[P_VB]
-    uvb = u[4 * n_osc] if dc else 0.0
-    vvb = v[4 * n_osc] if dc else 0.0
-    acc = 0.0
     for i in range(n_osc):
         j = 4 * i
         t_vv, t_vw, t_ww, m_vv, m_vw, m_ww = friction_second_partials(
             y[j + 1] - vb, y[j + 3], eps, etap
         )
-        a1 = u[j + 1] - uvb
-        b1 = u[j + 3]
-        a2 = v[j + 1] - vvb
-        b2 = v[j + 3]
-        cross = a1 * b2 + b1 * a2
-        d2t = t_vv * a1 * a2 + t_vw * cross + t_ww * b1 * b2
-        d2m = m_vv * a1 * a2 + m_vw * cross + m_ww * b1 * b2
+        d2[i, 0] = t_vv
+        d2[i, 1] = t_vw
+        d2[i, 2] = t_ww
+        d2[i, 3] = m_vv
+        d2[i, 4] = m_vw
+        d2[i, 5] = m_ww
+
+
+@njit(inline="always", **_JIT)
+def second_derivative_form_at(
+    d2: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    out: np.ndarray,
+) -> None:
+    """:func:`second_derivative_form` from the partials of :func:`second_partials_at`."""
+    mu = p[P_MU]
+    inv_m = 1.0 / p[P_M]
+    uvb = u[4 * n_osc] if dc else 0.0
+    vvb = v[4 * n_osc] if dc else 0.0
+    acc = 0.0
+    for i in range(n_osc):
+        j = 4 * i
+        d2t, d2m = _d2_disk(
+            d2[i, 0], d2[i, 1], d2[i, 2], d2[i, 3], d2[i, 4], d2[i, 5],
+            u[j + 1] - uvb, u[j + 3], v[j + 1] - vvb, v[j + 3],
+        )  # fmt: skip
         out[j] = 0.0
         out[j + 1] = -mu * d2t
         out[j + 2] = 0.0

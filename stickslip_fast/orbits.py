@@ -44,6 +44,7 @@ from .params import eta_prime
 from .poincare import STATUS_NAMES
 from .simulate import SimulationResult, simulate
 from .system import System
+from .trajectory import kernel_variant
 from .variational import propagate_tangents
 
 __all__ = [
@@ -245,6 +246,7 @@ def return_map(
     y = np.array(z, dtype=float)
     # a unit vector when no tangents are wanted: the tangent error norm is relative to |u|
     U = np.ascontiguousarray(np.eye(n)[:, mask] if tangents else np.eye(n)[:, :1])
+    variant = kernel_variant(system.n_oscillators, system.is_dc_motor)
     pts = np.full((period, n), np.nan)
     times = np.full(period, np.nan)
     t_acc = 0.0
@@ -254,7 +256,7 @@ def return_map(
         y[SECTION_INDEX] = 0.0  # exactly on the section: no crossing at t = 0
         code, y1, U1, t = call_interruptible(
             propagate_tangents, y, U, p_arr, system.n_oscillators, system.is_dc_motor,
-            float(t_max), 1, float(rtol), float(atol), float(tangent_atol), _MAX_STEPS,
+            variant, float(t_max), 1, float(rtol), float(atol), float(tangent_atol), _MAX_STEPS,
             abort=new_abort_flag(),
         )  # fmt: skip
         status = STATUS_NAMES[code]

@@ -41,6 +41,11 @@ Records
     factored once (the model's W) and every solve is a block forward
     substitution. Its error norm scales each u_j by ``tangent_atol |u_j|``:
     a direction's absolute tolerance is relative to its length.
+:class:`StickSlipTangentSmall`
+    :class:`StickSlipTangent` with N and the belt kind known at compile time,
+    as :class:`StickSlipSmall` is to :class:`StickSlip`: the same arithmetic
+    (bit-identical results) with constant loop bounds and the linear algebra
+    inlined. The number of tangent vectors stays a run-time value.
 
 Adding a problem: define a namedtuple record, a linear workspace, and an
 ``overload`` of each generic function that tests ``instance_class`` (see
@@ -60,19 +65,25 @@ from .jit import JIT, OVERLOAD, is_record
 from .linalg import (
     blocks_factor,
     blocks_solve,
-    bordered_matvec,
+    bordered_matvec_inline,
     w_factor,
     w_factor_inline,
     w_solve,
     w_solve_inline,
 )
-from .model import jacobian_blocks, rhs, second_derivative_form
+from .model import (
+    jacobian_blocks,
+    rhs,
+    second_derivative_form_at,
+    second_partials_at,
+)
 from .params import P_ETA, P_ETAP, eta_prime
 
 __all__ = [
     "StickSlip",
     "StickSlipSmall",
     "StickSlipTangent",
+    "StickSlipTangentSmall",
     "BorderedLinear",
     "SMALL_N_MAX",
     "make_stickslip",
@@ -80,6 +91,7 @@ __all__ = [
     "small_shape",
     "shape_dims",
     "make_tangent",
+    "tangent_variant",
     "alloc_bordered_linear",
     "problem_f",
     "problem_jac",
@@ -101,10 +113,17 @@ StickSlip = namedtuple("StickSlip", ["p", "n_osc", "dc"])
 #: a float64 zero for the DC motor).
 StickSlipSmall = namedtuple("StickSlipSmall", ["p", "shape"])
 #: The model with ``n_tangent`` tangent vectors; ``jb``, ``jcol``, ``jrow`` are
-#: scratch for J(y) u inside the right-hand side, ``unorm`` for the error norm.
+#: scratch for J(y) u inside the right-hand side, ``unorm`` for the error norm,
+#: ``d2`` the friction's second partials at the last Jacobian's point (N, 6).
 StickSlipTangent = namedtuple(
     "StickSlipTangent",
-    ["p", "n_osc", "dc", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm"],
+    ["p", "n_osc", "dc", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2"],
+)
+#: The tangent problem with N and the belt kind known at compile time (``shape``
+#: as in :class:`StickSlipSmall`); the other fields as in :class:`StickSlipTangent`.
+StickSlipTangentSmall = namedtuple(
+    "StickSlipTangentSmall",
+    ["p", "shape", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2"],
 )
 #: The bordered Jacobian at the last evaluation point and the factors of W.
 #: ``scal`` holds (corner, Schur complement); ``at`` the evaluation point and
@@ -172,8 +191,32 @@ def make_tangent(
     return StickSlipTangent(
         p_buf, n_osc, dc, n_tangent, tangent_atol,
         np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4)),
-        np.zeros(n_tangent),
+        np.zeros(n_tangent), np.zeros((n_osc, 6)),
     )  # fmt: skip
+
+
+def tangent_variant(prob, variant):  # noqa: ARG001 - resolved by overload
+    """In compiled code: the tangent record ``prob`` for the kernel variant ``variant``.
+
+    ``variant`` is ``()`` (``prob`` itself, a :class:`StickSlipTangent`) or a
+    :func:`small_shape` token (its :class:`StickSlipTangentSmall` twin, sharing
+    every array). The caller checks that the token matches N and the belt.
+    """
+
+
+@overload(tangent_variant, **_OVL)
+def _tangent_variant(prob, variant):
+    if _is(prob, StickSlipTangent):
+        if len(variant) == 0:
+            return lambda prob, variant: prob
+
+        def impl(prob, variant):
+            return StickSlipTangentSmall(
+                prob.p, variant, prob.n_tangent, prob.tangent_atol, prob.jb, prob.jcol,
+                prob.jrow, prob.unorm, prob.d2,
+            )  # fmt: skip
+
+        return impl
 
 
 @njit(**_JIT)
@@ -340,21 +383,6 @@ def _f(prob, y, out):
             rhs(y, prob.p, prob.n_osc, prob.dc, out)
 
         return impl
-    if _is(prob, StickSlipTangent):
-
-        def impl(prob, y, out):
-            n = 4 * prob.n_osc + (1 if prob.dc else 0)
-            rhs(y[:n], prob.p, prob.n_osc, prob.dc, out[:n])
-            corner = jacobian_blocks(
-                y[:n], prob.p, prob.n_osc, prob.dc, prob.jb, prob.jcol, prob.jrow
-            )
-            for j in range(1, prob.n_tangent + 1):
-                bordered_matvec(
-                    prob.jb, prob.jcol, prob.jrow, corner, prob.n_osc, prob.dc,
-                    y[j * n : (j + 1) * n], out[j * n : (j + 1) * n],
-                )  # fmt: skip
-
-        return impl
 
 
 @overload(problem_jac, **_OVL)
@@ -366,22 +394,11 @@ def _jac(prob, y, lin):
             lin.scal[0] = corner
 
         return impl
-    if _is(prob, StickSlipTangent):
-
-        def impl(prob, y, lin):
-            n = 4 * prob.n_osc + (1 if prob.dc else 0)
-            lin.scal[0] = jacobian_blocks(
-                y[:n], prob.p, prob.n_osc, prob.dc, lin.blocks, lin.col, lin.row
-            )
-            for i in range(y.size):
-                lin.at[i] = y[i]
-
-        return impl
 
 
 @overload(problem_factor, **_OVL)
 def _factor(prob, lin, sigma):
-    if _is(prob, StickSlip) or _is(prob, StickSlipTangent):
+    if _is(prob, StickSlip):
 
         def impl(prob, lin, sigma):
             schur = w_factor(
@@ -402,25 +419,6 @@ def _solve(prob, lin, b):
             w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, b)
 
         return impl
-    if _is(prob, StickSlipTangent):
-
-        def impl(prob, lin, b):
-            # [[W, 0], [-H(u_j), W]] x = b: solve the state part, then each tangent part
-            n = 4 * prob.n_osc + (1 if prob.dc else 0)
-            ky = b[:n]
-            w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, ky)
-            hv = lin.hv[:n]
-            y0 = lin.at[:n]
-            for j in range(1, prob.n_tangent + 1):
-                ku = b[j * n : (j + 1) * n]
-                second_derivative_form(
-                    y0, lin.at[j * n : (j + 1) * n], ky, prob.p, prob.n_osc, prob.dc, hv
-                )
-                for i in range(n):
-                    ku[i] += hv[i]
-                w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, ku)
-
-        return impl
 
 
 @overload(problem_error_norm, **_OVL)
@@ -429,30 +427,6 @@ def _error_norm(prob, err, y0, y1, rtol, atol):
 
         def impl(prob, err, y0, y1, rtol, atol):
             return error_norm(err, y0, y1, rtol, atol)
-
-        return impl
-    if _is(prob, StickSlipTangent):
-
-        def impl(prob, err, y0, y1, rtol, atol):
-            # y scaled by atol + rtol |y|; u_j by tangent_atol |u_j(t0)| + rtol |u_j|
-            n = 4 * prob.n_osc + (1 if prob.dc else 0)
-            k = prob.n_tangent
-            for j in range(1, k + 1):
-                un = 0.0
-                for r in range(j * n, (j + 1) * n):
-                    un += y0[r] * y0[r]
-                prob.unorm[j - 1] = math.sqrt(un)
-            acc = 0.0
-            for i in range(n):
-                sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
-                e = err[i] / sc
-                acc += e * e
-                for j in range(1, k + 1):
-                    q = j * n + i
-                    sc = prob.tangent_atol * prob.unorm[j - 1] + rtol * max(abs(y0[q]), abs(y1[q]))
-                    e = err[q] / sc
-                    acc += e * e
-            return math.sqrt(acc * (1.0 / ((1.0 + k) * n)))
 
         return impl
 
@@ -465,12 +439,181 @@ def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
             return initial_step(prob, y, f0, rtol, atol, order, work, fwork)
 
         return impl
+
+
+# ------------------------------------------------- StickSlipTangent(Small), shared
+# One body per generic function for both records: the generic record passes its
+# run-time N and belt, the small one literals. The arithmetic is the same, so the two
+# give bit-identical results. Inside, the J u products, the solves and the
+# second-derivative form are inlined (a tangent solve does 1 + k solves and k forms:
+# out of line, their call boundaries cost more than their 4x4 arithmetic). The
+# bodies themselves are cached functions called out of line: inlined into the
+# stepper as well they ran 15 % faster but compiled 2-5x longer (measured: a cold
+# find_orbit 65 s against 27 s, a cold Lyapunov run 46 s against 15 s).
+@njit(**_JIT)
+def _tangent_f(prob, n_osc, dc, y, out):
+    n = 4 * n_osc + (1 if dc else 0)
+    rhs(y[:n], prob.p, n_osc, dc, out[:n])
+    corner = jacobian_blocks(y[:n], prob.p, n_osc, dc, prob.jb, prob.jcol, prob.jrow)
+    for j in range(1, prob.n_tangent + 1):
+        bordered_matvec_inline(
+            prob.jb, prob.jcol, prob.jrow, corner, n_osc, dc,
+            y[j * n : (j + 1) * n], out[j * n : (j + 1) * n],
+        )  # fmt: skip
+
+
+# Out of line on purpose, like the other bodies: inlined, Numba's dead-code
+# elimination dropped its writes through the driver's borrowed records (the d2
+# partials went stale: the steps stayed correct but ~50x more of them were needed;
+# tests/test_steppers.py checks the step count now).
+@njit(**_JIT)
+def _tangent_jac(prob, n_osc, dc, y, lin):
+    n = 4 * n_osc + (1 if dc else 0)
+    lin.scal[0] = jacobian_blocks(y[:n], prob.p, n_osc, dc, lin.blocks, lin.col, lin.row)
+    second_partials_at(y[:n], prob.p, n_osc, dc, prob.d2)
+    for i in range(y.size):
+        lin.at[i] = y[i]
+
+
+@njit(**_JIT)
+def _tangent_solve(prob, n_osc, dc, lin, b):
+    # [[W, 0], [-H(u_j), W]] x = b: solve the state part, then each tangent part
+    n = 4 * n_osc + (1 if dc else 0)
+    ky = b[:n]
+    w_solve_inline(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], n_osc, dc, ky)
+    hv = lin.hv[:n]
+    for j in range(1, prob.n_tangent + 1):
+        ku = b[j * n : (j + 1) * n]
+        # D^2 f(y0)[u_j, ky] from the partials at y0 that _tangent_jac stored
+        second_derivative_form_at(prob.d2, lin.at[j * n : (j + 1) * n], ky, prob.p, n_osc, dc, hv)
+        for i in range(n):
+            ku[i] += hv[i]
+        w_solve_inline(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], n_osc, dc, ku)
+
+
+@njit(**_JIT)
+def _tangent_error_norm(prob, n_osc, dc, err, y0, y1, rtol, atol):
+    # y scaled by atol + rtol |y|; u_j by tangent_atol |u_j(t0)| + rtol |u_j|
+    n = 4 * n_osc + (1 if dc else 0)
+    k = prob.n_tangent
+    for j in range(1, k + 1):
+        un = 0.0
+        for r in range(j * n, (j + 1) * n):
+            un += y0[r] * y0[r]
+        prob.unorm[j - 1] = math.sqrt(un)
+    acc = 0.0
+    for i in range(n):
+        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        e = err[i] / sc
+        acc += e * e
+        for j in range(1, k + 1):
+            q = j * n + i
+            sc = prob.tangent_atol * prob.unorm[j - 1] + rtol * max(abs(y0[q]), abs(y1[q]))
+            e = err[q] / sc
+            acc += e * e
+    return math.sqrt(acc * (1.0 / ((1.0 + k) * n)))
+
+
+# ----------------------------------------- StickSlipTangent and StickSlipTangentSmall
+def _is_tangent(prob) -> bool:
+    return _is(prob, StickSlipTangent) or _is(prob, StickSlipTangentSmall)
+
+
+def _tangent_dims(prob):  # noqa: ARG001 - resolved by overload
+    """(N, dc): the generic record's fields, or the small record's compile-time literals."""
+
+
+@overload(_tangent_dims, **_OVL)
+def _tangent_dims_impl(prob):
+    if _is(prob, StickSlipTangentSmall):
+        n_osc, dc = _small_dims(prob)
+        return lambda prob: (n_osc, dc)
     if _is(prob, StickSlipTangent):
+        return lambda prob: (prob.n_osc, prob.dc)
+
+
+def _tangent_base(prob):  # noqa: ARG001 - resolved by overload
+    """The model's record (StickSlip or StickSlipSmall) of a tangent record."""
+
+
+@overload(_tangent_base, **_OVL)
+def _tangent_base_impl(prob):
+    if _is(prob, StickSlipTangentSmall):
+        return lambda prob: StickSlipSmall(prob.p, prob.shape)
+    if _is(prob, StickSlipTangent):
+        return lambda prob: StickSlip(prob.p, prob.n_osc, prob.dc)
+
+
+@overload(problem_f, **_OVL)
+def _tangent_f_ovl(prob, y, out):
+    if _is_tangent(prob):
+
+        def impl(prob, y, out):
+            n_osc, dc = _tangent_dims(prob)
+            _tangent_f(prob, n_osc, dc, y, out)
+
+        return impl
+
+
+@overload(problem_jac, **_OVL)
+def _tangent_jac_ovl(prob, y, lin):
+    if _is_tangent(prob):
+
+        def impl(prob, y, lin):
+            n_osc, dc = _tangent_dims(prob)
+            _tangent_jac(prob, n_osc, dc, y, lin)
+
+        return impl
+
+
+@overload(problem_factor, **_OVL)
+def _tangent_factor_ovl(prob, lin, sigma):
+    if _is_tangent(prob):
+
+        def impl(prob, lin, sigma):
+            # the model's W: the tangent blocks share it
+            n_osc, dc = _tangent_dims(prob)
+            schur = w_factor_inline(
+                sigma, lin.blocks, lin.col, lin.row, lin.scal[0], n_osc, dc, lin.lu, lin.piv,
+                lin.z,
+            )  # fmt: skip
+            lin.scal[1] = schur
+            return math.isfinite(schur)
+
+        return impl
+
+
+@overload(problem_solve, **_OVL)
+def _tangent_solve_ovl(prob, lin, b):
+    if _is_tangent(prob):
+
+        def impl(prob, lin, b):
+            n_osc, dc = _tangent_dims(prob)
+            _tangent_solve(prob, n_osc, dc, lin, b)
+
+        return impl
+
+
+@overload(problem_error_norm, **_OVL)
+def _tangent_error_norm_ovl(prob, err, y0, y1, rtol, atol):
+    if _is_tangent(prob):
+
+        def impl(prob, err, y0, y1, rtol, atol):
+            n_osc, dc = _tangent_dims(prob)
+            return _tangent_error_norm(prob, n_osc, dc, err, y0, y1, rtol, atol)
+
+        return impl
+
+
+@overload(problem_initial_step, **_OVL)
+def _tangent_initial_step_ovl(prob, y, f0, rtol, atol, order, work, fwork):
+    if _is_tangent(prob):
 
         def impl(prob, y, f0, rtol, atol, order, work, fwork):
             # from the state part alone
-            n = 4 * prob.n_osc + (1 if prob.dc else 0)
-            base = StickSlip(prob.p, prob.n_osc, prob.dc)
+            n_osc, dc = _tangent_dims(prob)
+            n = 4 * n_osc + (1 if dc else 0)
+            base = _tangent_base(prob)
             return initial_step(base, y[:n], f0[:n], rtol, atol, order, work[:n], fwork[:n])
 
         return impl

@@ -184,11 +184,11 @@ def _drive_model(method, prob, variant, lin, ws, y, t_end, ctl, obs, stop, abort
     return generic
 
 
-def _variant_matches(variant, n_osc, dc):  # noqa: ARG001 - resolved by overload
+def variant_matches(variant, n_osc, dc):  # noqa: ARG001 - resolved by overload
     """True if ``variant`` is () or the token of (n_osc, dc)."""
 
 
-@overload(_variant_matches, **OVERLOAD)
+@overload(variant_matches, **OVERLOAD)
 def _variant_matches_impl(variant, n_osc, dc):
     if len(variant) == 0:
         return lambda variant, n_osc, dc: True
@@ -211,7 +211,7 @@ def _run(
     for i in range(n):
         y[i] = y0[i]
     fstat[1] = math.nan
-    if not (_all_finite(prob.p) and _all_finite(y) and _variant_matches(variant, n_osc, dc)):
+    if not (_all_finite(prob.p) and _all_finite(y) and variant_matches(variant, n_osc, dc)):
         obs.counts[0] = 0
         obs.counts[1] = 0
         istat[0] = 0

@@ -24,9 +24,10 @@ from .driver import (
 )
 from .jit import JIT
 from .params import N_PARAMS
-from .problems import alloc_bordered_linear, make_tangent
+from .problems import alloc_bordered_linear, make_tangent, tangent_variant
+from .status import ST_ERROR
 from .steppers import RODAS5P_METHOD, alloc_workspace
-from .trajectory import X1_MINIMA
+from .trajectory import X1_MINIMA, variant_matches
 
 __all__ = ["propagate_tangents"]
 
@@ -40,6 +41,7 @@ def propagate_tangents(
     p: np.ndarray,
     n_osc: int,
     dc: bool,
+    variant: tuple,
     t_end: float,
     n_crossings: int,
     rtol: float,
@@ -55,6 +57,11 @@ def propagate_tangents(
     state *at* that crossing is returned, from the dense output. Otherwise it
     runs to ``t_end``.
 
+    ``variant`` is ``trajectory.kernel_variant(n_osc, dc)`` (the
+    :class:`~stickslip_fast.problems.StickSlipTangentSmall` kernel for small N,
+    bit-identical to the generic one and faster) or ``()`` (the generic kernel).
+    A token that does not match (n_osc, dc) gives status "error".
+
     Returns
     -------
     (status, y, U, t): the driver's status code, the state (n,), the tangent
@@ -64,7 +71,9 @@ def propagate_tangents(
     n = y0.size
     k = U0.shape[1]
     m = n * (1 + k)
-    prob = make_tangent(p, n_osc, dc, k, tangent_atol, np.empty(N_PARAMS))
+    if not variant_matches(variant, n_osc, dc):
+        return ST_ERROR, np.full(n, np.nan), np.full((n, k), np.nan), np.nan
+    prob = tangent_variant(make_tangent(p, n_osc, dc, k, tangent_atol, np.empty(N_PARAMS)), variant)
     y = np.empty(m)
     for i in range(n):
         y[i] = y0[i]

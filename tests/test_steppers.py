@@ -94,7 +94,8 @@ def test_kernel_rules_nan_and_bounded_rejections():
     assert STATUS_NAMES[st] in ("max-steps", "nonfinite", "step-underflow") and nr <= 50
 
 
-def test_state_transition_matrix_of_linear_model_is_expm():
+@pytest.mark.parametrize("variant", [(), (0,)], ids=["generic", "small"])
+def test_state_transition_matrix_of_linear_model_is_expm(variant):
     # mu = 0 removes friction from a constant-belt disk: y' = J y, so Phi(t) = expm(J t)
     from stickslip_fast.model import dense_jacobian
 
@@ -109,6 +110,7 @@ def test_state_transition_matrix_of_linear_model_is_expm():
         p,
         1,
         s.is_dc_motor,
+        variant,
         7.0,
         0,
         1e-11,
@@ -119,3 +121,67 @@ def test_state_transition_matrix_of_linear_model_is_expm():
     )
     assert STATUS_NAMES[st] == "ok" and t == 7.0
     np.testing.assert_allclose(U, expm(jac * 7.0), atol=1e-8)
+
+
+@pytest.mark.parametrize("drive", ["constant", "dc-motor"])
+def test_small_tangent_kernel_is_bit_identical_to_generic(drive):
+    # StickSlipTangentSmall: the generic tangent arithmetic with N and the belt known
+    # at compile time; one return to the section with the n - 1 tangents of the
+    # monodromy, through the stick-slip layer at eta = 2
+    from stickslip_fast.problems import small_shape
+
+    s = System.preset("asymmetric", eta=2.0, drive=drive)
+    n = s.n_state
+    y0 = np.zeros(n)
+    y0[0] = -0.3
+    U0 = np.ascontiguousarray(np.eye(n)[:, 1:])
+    runs = [
+        propagate_tangents(
+            y0,
+            U0,
+            s.to_array(),
+            1,
+            s.is_dc_motor,
+            v,
+            1e3,
+            2,
+            1e-10,
+            1e-12,
+            1e-10,
+            10**6,
+            np.zeros(1, np.int64),
+        )  # fmt: skip
+        for v in ((), small_shape(1, s.is_dc_motor))
+    ]
+    (st_g, y_g, U_g, t_g), (st_s, y_s, U_s, t_s) = runs
+    assert STATUS_NAMES[st_g] == "ok" and np.isfinite(t_g) and np.all(np.isfinite(U_g))
+    assert st_s == st_g and t_s == t_g
+    assert np.array_equal(y_s, y_g) and np.array_equal(U_s, U_g)
+
+
+def test_tangent_kernel_rejects_a_mismatched_variant():
+    from stickslip_fast.problems import small_shape
+
+    s = System.preset("asymmetric", eta=2.0)
+    n = s.n_state
+    st, y, U, t = propagate_tangents(
+        np.zeros(n), np.eye(n), s.to_array(), 1, False, small_shape(1, True), 10.0, 0,
+        1e-8, 1e-10, 1e-8, 1000, np.zeros(1, np.int64),
+    )  # fmt: skip
+    assert STATUS_NAMES[st] == "error" and np.all(np.isnan(U)) and np.isnan(t)
+
+
+@pytest.mark.parametrize("drive", ["constant", "dc-motor"])
+def test_tangent_problem_step_count_stays_near_the_plain_one(drive):
+    # The tangent problem's W must be its exact Jacobian (with the second-derivative
+    # block from the partials stored at each step's start). A stale block leaves the
+    # results right but the tangents' error estimate large: measured ~50x the steps
+    # when Numba's dead-code elimination dropped that store. Correct: 2.1x the plain
+    # run's steps at eta = 2 (the tangent also carries error control).
+    import stickslip_fast as ssf
+
+    s = System.preset("asymmetric", eta=2.0, drive=drive)
+    lyap = ssf.largest_lyapunov(s, 300.0, 100.0, rtol=1e-8, atol=1e-10)
+    plain = ssf.simulate(s, 300.0, rtol=1e-8, atol=1e-10)
+    assert lyap.status == "ok" and plain.status in ("ok", "equilibrium")
+    assert lyap.n_steps < 4 * plain.n_steps
