@@ -355,7 +355,8 @@ def largest_lyapunov(
     code = call_interruptible(
         lyapunov_kernel,
         y_init, u_init, system.to_array(), system.n_oscillators, system.is_dc_motor,
-        kernel_variant(system.n_oscillators, system.is_dc_motor), float(t_end), float(t_transient), float(rtol), float(atol), tangent_atol,
+        kernel_variant(system.n_oscillators, system.is_dc_motor),
+        float(t_end), float(t_transient), float(rtol), float(atol), tangent_atol,
         float(renorm_dt), int(max_steps), conv_t, conv_est, y_end, stats, fstats, abort=abort,
     )  # fmt: skip
     runtime = time.perf_counter() - t0
