@@ -705,8 +705,9 @@ def _orbit_evaluator(
 
     Returns ``(evaluate, full, system_at, periods)``: ``evaluate(x)`` for
     :func:`pseudo_arclength` (x = section coordinates and lambda; the map's
-    Jacobian in z from the variational equations, d/dlambda by a central
-    difference), ``full(x)`` the state on the section, ``system_at(lam)`` and
+    Jacobian in z and its derivative in lambda from the variational equations
+    and the parameter sensitivity, integrated together), ``full(x)`` the state
+    on the section, ``system_at(lam)`` and
     ``periods`` (the return time of every evaluated x, keyed by its bytes; pass
     a dict to share it between evaluators of different tolerances).
     """
@@ -736,20 +737,15 @@ def _orbit_evaluator(
         except ValueError:  # outside the parameter's valid range
             return False, None, None, None
         z = full(x)
-        st, pts, times, jac = return_map(s, z, p, **kw)
+        # [D_z P^p, dP^p/dlambda] in one integration: the tangents and the parameter
+        # sensitivity together (a central difference of the map would take two more)
+        st, pts, times, jac_full = return_map(s, z, p, param=param, param_step=fd_step, **kw)
         if st != "ok":
             return False, None, None, None
-        h = fd_step * max(1.0, abs(lam))
-
-        def image(v):
-            st_v, pv, _, _ = return_map(system_at(v), z, p, tangents=False, **kw)
-            return pv[-1][mask] if st_v == "ok" else None
-
-        dlam = _difference(image, lam, h, pts[-1][mask])
-        if dlam is None:
-            return False, None, None, None
+        jac = jac_full[:, :-1]
         G = pts[-1][mask] - x[:-1]
-        DG = np.hstack([jac - np.eye(n - 1), dlam[:, None]])
+        DG = jac_full.copy()
+        DG[:, :-1] -= np.eye(n - 1)
         out = (True, G, DG, jac)
         periods[key] = float(times[-1])
         cache.clear()
@@ -798,9 +794,10 @@ def continue_orbit(
     rtol, atol : float
         Integration tolerances of the return map.
     fd_step : float
-        Relative step of the central difference dP/dlambda (the variational
-        equations give the Jacobian in z only; one-sided at the edge of the
-        parameter's valid range).
+        Relative step of the central difference of the vector field and its
+        Jacobian in the parameter, which drives the parameter sensitivity that
+        gives dP/dlambda (one-sided at the edge of the parameter's valid range;
+        see :func:`~stickslip_fast.orbits.return_map`).
     stick_events : bool
         Record the stick phases of every point (``Branch.stick_count``,
         ``stick_time``; :func:`~stickslip_fast.orbits.stick_phases`) and locate

@@ -24,6 +24,15 @@ f at one crossing to f at the next, which the final projection annihilates, so
 projecting once per crossing (as done here, to keep the tangents small) and
 once at the end give the same matrix.
 
+The derivative in a parameter lambda follows the same way: with s(t) = dy/dlambda
+integrated from s(0) = 0 along s' = J s + df/dlambda (section coordinates held
+fixed), dT/dlambda = -e^T s(T) / (e^T f_p) and
+
+    dP^p/dlambda = (I - f_p e^T / (e^T f_p)) s(T),
+
+projected at each crossing like the tangents (``return_map(..., param=...)``).
+Continuation uses it as the last column of its Jacobian.
+
 The tangents come from :func:`stickslip_fast.variational.propagate_tangents`
 (the compiled Rodas5P with the exact variational Jacobian, the code the
 Lyapunov exponent uses), integrated with n - 1 tangent vectors, the section's
@@ -32,6 +41,7 @@ coordinate directions.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -43,9 +53,9 @@ from .model import dense_jacobian, friction, rhs
 from .params import eta_prime
 from .poincare import STATUS_NAMES
 from .simulate import SimulationResult, simulate
-from .system import System
+from .system import SWEEPABLE, System
 from .trajectory import kernel_variant
-from .variational import propagate_tangents
+from .variational import propagate_sensitivity, propagate_tangents
 
 __all__ = [
     "Orbit",
@@ -208,6 +218,8 @@ def return_map(
     t_max: float = 1e4,
     tangents: bool = True,
     tangent_atol: float = _TANGENT_ATOL,
+    param: str | None = None,
+    param_step: float = 1e-7,
 ) -> tuple[str, np.ndarray, np.ndarray, np.ndarray | None]:
     """Evaluate P^p on the section and (optionally) its Jacobian.
 
@@ -227,6 +239,15 @@ def return_map(
     tangent_atol : float
         Error tolerance of a tangent vector relative to its length (1e-8
         leaves errors of ~1e-6 in the Jacobian at the presets; 1e-10 ~1e-9).
+    param : str, optional
+        A :class:`System` field (one of ``SWEEPABLE``): with ``tangents``, also
+        integrate the sensitivity to it and return dP^p/d param as the
+        Jacobian's last column.
+    param_step : float
+        Relative step h / max(1, |param|) of the central difference of the
+        vector field and its Jacobian in ``param`` (one-sided at the edge of
+        the parameter's valid range). It differences the model's equations, not
+        the map, so no integration error is divided by h.
 
     Returns
     -------
@@ -238,7 +259,14 @@ def return_map(
     times : ndarray, shape (p,)
         Times from z to each crossing.
     jacobian : ndarray, shape (n_state - 1, n_state - 1) or None
-        D P^p(z) in section coordinates (None without ``tangents``).
+        D P^p(z) in section coordinates (None without ``tangents``); with
+        ``param``, shape (n_state - 1, n_state): [D_z P^p, dP^p/d param].
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``param``, or one that has no valid value on either side
+        of its current one.
     """
     n = system.n_state
     mask = np.arange(n) != SECTION_INDEX
@@ -246,6 +274,9 @@ def return_map(
     y = np.array(z, dtype=float)
     # a unit vector when no tangents are wanted: the tangent error norm is relative to |u|
     U = np.ascontiguousarray(np.eye(n)[:, mask] if tangents else np.eye(n)[:, :1])
+    sens_p, sens_inv = _sensitivity_params(system, param if tangents else None, param_step)
+    if sens_p is not None:
+        U = np.ascontiguousarray(np.hstack([U, np.zeros((n, 1))]))
     variant = kernel_variant(system.n_oscillators, system.is_dc_motor)
     pts = np.full((period, n), np.nan)
     times = np.full(period, np.nan)
@@ -254,11 +285,16 @@ def return_map(
     e[SECTION_INDEX] = 1.0
     for i in range(period):
         y[SECTION_INDEX] = 0.0  # exactly on the section: no crossing at t = 0
-        code, y1, U1, t = call_interruptible(
-            propagate_tangents, y, U, p_arr, system.n_oscillators, system.is_dc_motor,
-            variant, float(t_max), 1, float(rtol), float(atol), float(tangent_atol), _MAX_STEPS,
-            abort=new_abort_flag(),
-        )  # fmt: skip
+        args = (y, U, p_arr, system.n_oscillators, system.is_dc_motor, variant, float(t_max), 1,
+                float(rtol), float(atol), float(tangent_atol))  # fmt: skip
+        if sens_p is None:
+            code, y1, U1, t = call_interruptible(
+                propagate_tangents, *args, _MAX_STEPS, abort=new_abort_flag()
+            )
+        else:
+            code, y1, U1, t = call_interruptible(
+                propagate_sensitivity, *args, sens_p, sens_inv, _MAX_STEPS, abort=new_abort_flag()
+            )  # fmt: skip
         status = STATUS_NAMES[code]
         if status == "ok" and not math.isfinite(t):
             status = "no-crossings"
@@ -274,6 +310,36 @@ def return_map(
         y = np.ascontiguousarray(y1)
     jac = U[mask] if tangents else None
     return "ok", pts, times, jac
+
+
+def _sensitivity_params(system: System, param: str | None, rel_step: float):
+    """(p2, inv) of :func:`propagate_sensitivity` for the sensitivity to ``param``.
+
+    Rows: the packed parameters at param + h and param - h, or at param and one
+    of them where the other is outside the parameter's valid range. (None, 0.0)
+    without ``param``.
+    """
+    if param is None:
+        return None, 0.0
+    if param not in SWEEPABLE:
+        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
+    if not (isinstance(rel_step, (int, float)) and 0 < rel_step < 1e-2):
+        raise ValueError(f"param_step must be a number in (0, 0.01), got {rel_step!r}")
+    lam = float(getattr(system, param))
+    h = rel_step * max(1.0, abs(lam))
+
+    def at(v):
+        try:
+            return dataclasses.replace(system, **{param: v}).to_array(), v
+        except ValueError:  # outside the parameter's valid range
+            return None
+
+    hi, lo = at(lam + h), at(lam - h)
+    if hi is None and lo is None:
+        raise ValueError(f"{param} = {lam} has no valid value within {h:g} on either side")
+    hi = hi or (system.to_array(), lam)
+    lo = lo or (system.to_array(), lam)
+    return np.ascontiguousarray(np.stack([hi[0], lo[0]])), 1.0 / (hi[1] - lo[1])
 
 
 def _multipliers(jac: np.ndarray) -> np.ndarray:

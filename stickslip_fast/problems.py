@@ -40,7 +40,12 @@ Records
     triangular, [[J, 0], [H(u_j), J]] with H(u) v = D^2 f(y)[u, v], so W is
     factored once (the model's W) and every solve is a block forward
     substitution. Its error norm scales each u_j by ``tangent_atol |u_j|``:
-    a direction's absolute tolerance is relative to its length.
+    a direction's absolute tolerance is relative to its length. With a
+    :class:`ParamSensitivity` in its ``sens`` field, the last vector is the
+    sensitivity to one parameter, s = dy/dlambda with s' = J s + df/dlambda
+    (its Jacobian row gains dJ/dlambda); df/dlambda and dJ/dlambda are central
+    differences of the model's f and J in lambda, which have no integration
+    error in them.
 :class:`StickSlipTangentSmall`
     :class:`StickSlipTangent` with N and the belt kind known at compile time,
     as :class:`StickSlipSmall` is to :class:`StickSlip`: the same arithmetic
@@ -84,6 +89,7 @@ __all__ = [
     "StickSlipSmall",
     "StickSlipTangent",
     "StickSlipTangentSmall",
+    "ParamSensitivity",
     "BorderedLinear",
     "SMALL_N_MAX",
     "make_stickslip",
@@ -91,6 +97,7 @@ __all__ = [
     "small_shape",
     "shape_dims",
     "make_tangent",
+    "make_sensitivity",
     "tangent_variant",
     "alloc_bordered_linear",
     "problem_f",
@@ -115,15 +122,29 @@ StickSlipSmall = namedtuple("StickSlipSmall", ["p", "shape"])
 #: The model with ``n_tangent`` tangent vectors; ``jb``, ``jcol``, ``jrow`` are
 #: scratch for J(y) u inside the right-hand side, ``unorm`` for the error norm,
 #: ``d2`` the friction's second partials at the last Jacobian's point (N, 6).
+#: ``sens`` is None (plain tangent vectors) or a :class:`ParamSensitivity`: then
+#: the last tangent vector is s = dy/dlambda. The two are different types, so
+#: the plain record compiles without a trace of the sensitivity's code.
 StickSlipTangent = namedtuple(
     "StickSlipTangent",
-    ["p", "n_osc", "dc", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2"],
+    ["p", "n_osc", "dc", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2", "sens"],
 )
 #: The tangent problem with N and the belt kind known at compile time (``shape``
 #: as in :class:`StickSlipSmall`); the other fields as in :class:`StickSlipTangent`.
 StickSlipTangentSmall = namedtuple(
     "StickSlipTangentSmall",
-    ["p", "shape", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2"],
+    ["p", "shape", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2", "sens"],
+)
+#: The sensitivity s = dy/dlambda to one parameter, s' = J s + df/dlambda, whose
+#: row of the exact Jacobian is [H(s) + dJ/dlambda, J]. ``p2`` holds the packed
+#: parameters at lambda + h and lambda - h (eta' filled in), ``inv`` = 1 / (2 h):
+#: df/dlambda and dJ/dlambda are central differences of the model's f and J,
+#: which carry no integration error. ``jb``, ``jcol``, ``jrow``, ``corner`` hold
+#: dJ/dlambda at the last Jacobian's point, ``mjb``, ``mjcol``, ``mjrow`` and
+#: ``f2`` (2, n) are scratch.
+ParamSensitivity = namedtuple(
+    "ParamSensitivity",
+    ["p2", "inv", "jb", "jcol", "jrow", "corner", "mjb", "mjcol", "mjrow", "f2"],
 )
 #: The bordered Jacobian at the last evaluation point and the factors of W.
 #: ``scal`` holds (corner, Schur complement); ``at`` the evaluation point and
@@ -182,16 +203,45 @@ def make_small(prob: StickSlip, shape: tuple) -> StickSlipSmall:
 
 @njit(**_JIT)
 def make_tangent(
-    p: np.ndarray, n_osc: int, dc: bool, n_tangent: int, tangent_atol: float, p_buf: np.ndarray
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    n_tangent: int,
+    tangent_atol: float,
+    p_buf: np.ndarray,
+    sens=None,
 ) -> StickSlipTangent:
-    """The tangent problem's record (allocates its small scratch)."""
+    """The tangent problem's record (allocates its small scratch).
+
+    ``sens`` is None for plain tangent vectors, or a :class:`ParamSensitivity`
+    (:func:`make_sensitivity`): the last of the ``n_tangent`` vectors is then
+    the parameter sensitivity dy/dlambda.
+    """
     for i in range(p.size):
         p_buf[i] = p[i]
     p_buf[P_ETAP] = eta_prime(p_buf[P_ETA])
     return StickSlipTangent(
         p_buf, n_osc, dc, n_tangent, tangent_atol,
         np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4)),
-        np.zeros(n_tangent), np.zeros((n_osc, 6)),
+        np.zeros(n_tangent), np.zeros((n_osc, 6)), sens,
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def make_sensitivity(p2: np.ndarray, inv: float, n_osc: int, dc: bool) -> ParamSensitivity:
+    """A :class:`ParamSensitivity` from the packed parameters at lambda +- h (2, N_PARAMS).
+
+    ``inv`` is 1 / (the difference of lambda between the two rows); eta' is
+    derived from eta in a copy of ``p2``.
+    """
+    pp = p2.copy()
+    for r in range(2):
+        pp[r, P_ETAP] = eta_prime(pp[r, P_ETA])
+    n = 4 * n_osc + (1 if dc else 0)
+    return ParamSensitivity(
+        pp, inv, np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4)),
+        np.zeros(1), np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4)),
+        np.zeros((2, n)),
     )  # fmt: skip
 
 
@@ -213,7 +263,7 @@ def _tangent_variant(prob, variant):
         def impl(prob, variant):
             return StickSlipTangentSmall(
                 prob.p, variant, prob.n_tangent, prob.tangent_atol, prob.jb, prob.jcol,
-                prob.jrow, prob.unorm, prob.d2,
+                prob.jrow, prob.unorm, prob.d2, prob.sens,
             )  # fmt: skip
 
         return impl
@@ -451,15 +501,24 @@ def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
 # stepper as well they ran 15 % faster but compiled 2-5x longer (measured: a cold
 # find_orbit 65 s against 27 s, a cold Lyapunov run 46 s against 15 s).
 @njit(**_JIT)
-def _tangent_f(prob, n_osc, dc, y, out):
+def _tangent_f(prob, sens, n_osc, dc, y, out):
     n = 4 * n_osc + (1 if dc else 0)
+    k = prob.n_tangent
     rhs(y[:n], prob.p, n_osc, dc, out[:n])
     corner = jacobian_blocks(y[:n], prob.p, n_osc, dc, prob.jb, prob.jcol, prob.jrow)
-    for j in range(1, prob.n_tangent + 1):
+    for j in range(1, k + 1):
         bordered_matvec_inline(
             prob.jb, prob.jcol, prob.jrow, corner, n_osc, dc,
             y[j * n : (j + 1) * n], out[j * n : (j + 1) * n],
         )  # fmt: skip
+    if sens is not None:
+        # the sensitivity's inhomogeneous term df/dlambda (central difference of f)
+        fp = sens.f2[0]
+        fm = sens.f2[1]
+        rhs(y[:n], sens.p2[0], n_osc, dc, fp)
+        rhs(y[:n], sens.p2[1], n_osc, dc, fm)
+        for i in range(n):
+            out[k * n + i] += (fp[i] - fm[i]) * sens.inv
 
 
 # Out of line on purpose, like the other bodies: inlined, Numba's dead-code
@@ -467,16 +526,29 @@ def _tangent_f(prob, n_osc, dc, y, out):
 # partials went stale: the steps stayed correct but ~50x more of them were needed;
 # tests/test_steppers.py checks the step count now).
 @njit(**_JIT)
-def _tangent_jac(prob, n_osc, dc, y, lin):
+def _tangent_jac(prob, sens, n_osc, dc, y, lin):
     n = 4 * n_osc + (1 if dc else 0)
     lin.scal[0] = jacobian_blocks(y[:n], prob.p, n_osc, dc, lin.blocks, lin.col, lin.row)
     second_partials_at(y[:n], prob.p, n_osc, dc, prob.d2)
     for i in range(y.size):
         lin.at[i] = y[i]
+    if sens is not None:
+        # dJ/dlambda for the sensitivity's block row
+        s = sens.inv
+        cp = jacobian_blocks(y[:n], sens.p2[0], n_osc, dc, sens.jb, sens.jcol, sens.jrow)
+        cm = jacobian_blocks(y[:n], sens.p2[1], n_osc, dc, sens.mjb, sens.mjcol, sens.mjrow)
+        sens.corner[0] = (cp - cm) * s
+        for i in range(n_osc):
+            for r in range(4):
+                for c in range(4):
+                    sens.jb[i, r, c] = (sens.jb[i, r, c] - sens.mjb[i, r, c]) * s
+                if dc:
+                    sens.jcol[i, r] = (sens.jcol[i, r] - sens.mjcol[i, r]) * s
+                    sens.jrow[i, r] = (sens.jrow[i, r] - sens.mjrow[i, r]) * s
 
 
 @njit(**_JIT)
-def _tangent_solve(prob, n_osc, dc, lin, b):
+def _tangent_solve(prob, sens, n_osc, dc, lin, b):
     # [[W, 0], [-H(u_j), W]] x = b: solve the state part, then each tangent part
     n = 4 * n_osc + (1 if dc else 0)
     ky = b[:n]
@@ -488,12 +560,18 @@ def _tangent_solve(prob, n_osc, dc, lin, b):
         second_derivative_form_at(prob.d2, lin.at[j * n : (j + 1) * n], ky, prob.p, n_osc, dc, hv)
         for i in range(n):
             ku[i] += hv[i]
+        if sens is not None and j == prob.n_tangent:
+            # the sensitivity's row of the exact Jacobian has dJ/dlambda too
+            bordered_matvec_inline(sens.jb, sens.jcol, sens.jrow, sens.corner[0], n_osc, dc, ky, hv)
+            for i in range(n):
+                ku[i] += hv[i]
         w_solve_inline(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], n_osc, dc, ku)
 
 
 @njit(**_JIT)
-def _tangent_error_norm(prob, n_osc, dc, err, y0, y1, rtol, atol):
-    # y scaled by atol + rtol |y|; u_j by tangent_atol |u_j(t0)| + rtol |u_j|
+def _tangent_error_norm(prob, sens, n_osc, dc, err, y0, y1, rtol, atol):
+    # y scaled by atol + rtol |y|; u_j by tangent_atol |u_j(t0)| + rtol |u_j|; the
+    # sensitivity (from s = 0) by tangent_atol max(|s(t0)|, 1) + rtol |s|
     n = 4 * n_osc + (1 if dc else 0)
     k = prob.n_tangent
     for j in range(1, k + 1):
@@ -501,6 +579,8 @@ def _tangent_error_norm(prob, n_osc, dc, err, y0, y1, rtol, atol):
         for r in range(j * n, (j + 1) * n):
             un += y0[r] * y0[r]
         prob.unorm[j - 1] = math.sqrt(un)
+    if sens is not None:
+        prob.unorm[k - 1] = max(prob.unorm[k - 1], 1.0)
     acc = 0.0
     for i in range(n):
         sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
@@ -550,7 +630,7 @@ def _tangent_f_ovl(prob, y, out):
 
         def impl(prob, y, out):
             n_osc, dc = _tangent_dims(prob)
-            _tangent_f(prob, n_osc, dc, y, out)
+            _tangent_f(prob, prob.sens, n_osc, dc, y, out)
 
         return impl
 
@@ -561,7 +641,7 @@ def _tangent_jac_ovl(prob, y, lin):
 
         def impl(prob, y, lin):
             n_osc, dc = _tangent_dims(prob)
-            _tangent_jac(prob, n_osc, dc, y, lin)
+            _tangent_jac(prob, prob.sens, n_osc, dc, y, lin)
 
         return impl
 
@@ -589,7 +669,7 @@ def _tangent_solve_ovl(prob, lin, b):
 
         def impl(prob, lin, b):
             n_osc, dc = _tangent_dims(prob)
-            _tangent_solve(prob, n_osc, dc, lin, b)
+            _tangent_solve(prob, prob.sens, n_osc, dc, lin, b)
 
         return impl
 
@@ -600,7 +680,7 @@ def _tangent_error_norm_ovl(prob, err, y0, y1, rtol, atol):
 
         def impl(prob, err, y0, y1, rtol, atol):
             n_osc, dc = _tangent_dims(prob)
-            return _tangent_error_norm(prob, n_osc, dc, err, y0, y1, rtol, atol)
+            return _tangent_error_norm(prob, prob.sens, n_osc, dc, err, y0, y1, rtol, atol)
 
         return impl
 

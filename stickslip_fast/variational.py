@@ -2,8 +2,9 @@
 
 :func:`propagate_tangents` integrates y' = f(y) together with k tangent vectors
 u_j' = J(y) u_j (the problem :class:`problems.StickSlipTangent`) with Rodas5P
-and the analytic Jacobian. With U(0) = I it returns the state-transition
-matrix Phi(t) = dy(t)/dy(0), from which monodromy matrices and the Jacobian of
+and the analytic Jacobian; :func:`propagate_sensitivity` also the sensitivity
+s = dy/dlambda to one parameter (s' = J s + df/dlambda). With U(0) = I they
+return the state-transition matrix Phi(t) = dy(t)/dy(0), from which monodromy matrices and the Jacobian of
 the Poincare return map follow. The largest Lyapunov exponent
 (:mod:`stickslip_fast.lyapunov`) runs the same problem on the same driver with
 k = 1 and a renormalising observer.
@@ -24,12 +25,12 @@ from .driver import (
 )
 from .jit import JIT
 from .params import N_PARAMS
-from .problems import alloc_bordered_linear, make_tangent, tangent_variant
+from .problems import alloc_bordered_linear, make_sensitivity, make_tangent, tangent_variant
 from .status import ST_ERROR
 from .steppers import RODAS5P_METHOD, alloc_workspace
 from .trajectory import X1_MINIMA, variant_matches
 
-__all__ = ["propagate_tangents"]
+__all__ = ["propagate_tangents", "propagate_sensitivity"]
 
 _JIT = JIT
 
@@ -68,12 +69,65 @@ def propagate_tangents(
     vectors (n, k) and the time, at the last crossing (``n_crossings`` > 0,
     t = NaN if it was not reached) or at the final time.
     """
+    if not variant_matches(variant, n_osc, dc):
+        return _failed(y0, U0)
+    prob = make_tangent(p, n_osc, dc, U0.shape[1], tangent_atol, np.empty(N_PARAMS))
+    return _propagate(
+        tangent_variant(prob, variant), y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol,
+        max_steps, abort,
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def propagate_sensitivity(
+    y0: np.ndarray,
+    U0: np.ndarray,
+    p: np.ndarray,
+    n_osc: int,
+    dc: bool,
+    variant: tuple,
+    t_end: float,
+    n_crossings: int,
+    rtol: float,
+    atol: float,
+    tangent_atol: float,
+    p2: np.ndarray,
+    inv: float,
+    max_steps: int,
+    abort: np.ndarray,
+):
+    """:func:`propagate_tangents` whose last column of U0 is the sensitivity dy/dlambda.
+
+    ``p2`` (2, N_PARAMS) holds the packed parameters at lambda + h and
+    lambda - h, ``inv`` = 1 / (their difference in lambda): the last column
+    follows s' = J s + df/dlambda, with df/dlambda and dJ/dlambda central
+    differences of the model's equations (start it at 0 for d phi_t / d lambda).
+    The other columns are tangent vectors as in :func:`propagate_tangents`, and
+    the returns are the same. A separate kernel, so that the plain tangent
+    problem compiles without the sensitivity's code.
+    """
+    if not variant_matches(variant, n_osc, dc) or U0.shape[1] < 1 or p2.shape[0] != 2:
+        return _failed(y0, U0)
+    sens = make_sensitivity(p2, inv, n_osc, dc)
+    prob = make_tangent(p, n_osc, dc, U0.shape[1], tangent_atol, np.empty(N_PARAMS), sens)
+    return _propagate(
+        tangent_variant(prob, variant), y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol,
+        max_steps, abort,
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def _failed(y0, U0):
+    n, k = U0.shape
+    return ST_ERROR, np.full(n, np.nan), np.full((n, k), np.nan), np.nan
+
+
+@njit(**_JIT)
+def _propagate(prob, y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol, max_steps, abort):
+    """The driver run shared by both entry points (``prob``: a tangent record)."""
     n = y0.size
     k = U0.shape[1]
     m = n * (1 + k)
-    if not variant_matches(variant, n_osc, dc):
-        return ST_ERROR, np.full(n, np.nan), np.full((n, k), np.nan), np.nan
-    prob = tangent_variant(make_tangent(p, n_osc, dc, k, tangent_atol, np.empty(N_PARAMS)), variant)
     y = np.empty(m)
     for i in range(n):
         y[i] = y0[i]

@@ -18,6 +18,7 @@ import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.orbits import return_map
+from stickslip_fast.params import P_ETA
 
 REF = Path(__file__).resolve().parent / "reference"
 sys.path.insert(0, str(REF))
@@ -83,6 +84,41 @@ def test_multipliers_match_finite_differences_of_the_return_map(orbits, eta, per
     assert abs(o.multipliers[0] - lead_fd) < 1e-5
     # the multipliers are the Jacobian's eigenvalues, largest modulus first
     assert np.all(np.diff(np.abs(o.multipliers)) <= 0)
+
+
+@pytest.mark.parametrize("eta, period", [(2.0, 1), (9.99, 2)])
+def test_parameter_column_matches_finite_differences_of_the_return_map(orbits, eta, period):
+    # dP^p/deta from the sensitivity integrated with the tangents, against a central
+    # difference of the map itself
+    o = orbits[eta]
+    s = o.system
+    z = o.points[0]
+    st, _, _, jac = return_map(s, z, period, param="eta")
+    assert st == "ok" and jac.shape == (3, 4)
+    np.testing.assert_allclose(jac[:, :3], o.jacobian, rtol=0, atol=1e-6)
+    h = 1e-6
+    images = []
+    for d in (h, -h):
+        st_d, pd, _, _ = return_map(dataclasses.replace(s, eta=eta + d), z, period,
+                                    tangents=False)  # fmt: skip
+        assert st_d == "ok"
+        images.append(pd[-1][SECTION])
+    fd = (images[0] - images[1]) / (2 * h)
+    assert np.max(np.abs(fd)) > 1e-3
+    np.testing.assert_allclose(jac[:, 3], fd, rtol=0, atol=1e-5 * max(1.0, np.max(np.abs(fd))))
+
+
+def test_parameter_sensitivity_is_one_sided_at_the_valid_range_edge():
+    from stickslip_fast.orbits import _sensitivity_params
+
+    s = ssf.System.preset("asymmetric", eta=10.0)
+    rows, inv = _sensitivity_params(s, "eta", 1e-7)
+    # eta = 10 is the top of eta's valid range: the step goes down only
+    assert np.array_equal(rows[0], s.to_array())
+    assert rows[1][P_ETA] == pytest.approx(10.0 - 1e-6, abs=1e-15)
+    assert inv == pytest.approx(1e6, rel=1e-9)
+    with pytest.raises(ValueError, match="param"):
+        return_map(s, np.zeros(4), 1, param="nope")
 
 
 def test_leading_multiplier_at_eta_2_is_the_issue_value(orbits):

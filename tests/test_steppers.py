@@ -12,7 +12,7 @@ from scipy.linalg import expm
 from stickslip_fast import System
 from stickslip_fast.status import STATUS_NAMES
 from stickslip_fast.testproblems import Kaps, LinearProblem, ProtheroRobinson, solve_test_problem
-from stickslip_fast.variational import propagate_tangents
+from stickslip_fast.variational import propagate_sensitivity, propagate_tangents
 
 A_OSC = np.array([[0.0, 1.0], [-1.0, -0.1]])
 
@@ -121,6 +121,53 @@ def test_state_transition_matrix_of_linear_model_is_expm(variant):
     )
     assert STATUS_NAMES[st] == "ok" and t == 7.0
     np.testing.assert_allclose(U, expm(jac * 7.0), atol=1e-8)
+
+
+@pytest.mark.parametrize("variant", [(), (0,)], ids=["generic", "small"])
+def test_parameter_sensitivity_of_linear_model_is_the_expm_derivative(variant):
+    # mu = 0: y' = J(k12) y with J affine in k12, so d/dk12 expm(J t) y0 is exactly the
+    # upper-right block of expm([[J, B], [0, J]] t) y0 with B = dJ/dk12 (Van Loan)
+    from stickslip_fast.model import dense_jacobian
+
+    k12, h = -0.8, 1e-6
+    s = System(mu=0.0, k12=k12, c=0.05, c12=0.01, m=2.0)
+    n = s.n_state
+    y0 = np.linspace(0.1, 0.3, n)
+    jac = dense_jacobian(y0, s.to_array(), 1, False)
+    dj = np.zeros((n, n))
+    dj[1, 2] = -1.0
+    dj[3, 0] = -1.0 / s.m
+    big = np.block([[jac, dj], [np.zeros((n, n)), jac]])
+    ref = expm(big * 7.0)[:n, n:] @ y0
+    p2 = np.stack([System(mu=0.0, k12=k12 + d, c=0.05, c12=0.01, m=2.0).to_array()
+                   for d in (h, -h)])  # fmt: skip
+    U0 = np.hstack([np.eye(n), np.zeros((n, 1))])
+    st, y, U, t = propagate_sensitivity(
+        y0, U0, s.to_array(), 1, False, variant, 7.0, 0, 1e-11, 1e-13, 1e-12, p2,
+        1.0 / (2 * h), 10**6, np.zeros(1, np.int64),
+    )  # fmt: skip
+    assert STATUS_NAMES[st] == "ok" and t == 7.0
+    np.testing.assert_allclose(U[:, :n], expm(jac * 7.0), atol=1e-8)
+    np.testing.assert_allclose(U[:, n], ref, atol=1e-8)
+    assert np.max(np.abs(ref)) > 0.05  # the reference is not trivially small
+    # the tangent columns are those of the plain tangent kernel, bit for bit
+    st0, y_0, U_0, t_0 = propagate_tangents(
+        y0, np.eye(n), s.to_array(), 1, False, variant, 7.0, 0, 1e-11, 1e-13, 1e-12, 10**6,
+        np.zeros(1, np.int64),
+    )  # fmt: skip
+    assert STATUS_NAMES[st0] == "ok"
+    np.testing.assert_allclose(U_0, U[:, :n], atol=1e-9)
+    np.testing.assert_allclose(y_0, y, atol=1e-12)
+
+
+def test_sensitivity_kernel_rejects_bad_rows():
+    s = System(mu=0.0)
+    n = s.n_state
+    st, y, U, t = propagate_sensitivity(
+        np.zeros(n), np.zeros((n, 1)), s.to_array(), 1, False, (), 1.0, 0, 1e-8, 1e-10, 1e-8,
+        np.stack([s.to_array()] * 3), 1.0, 1000, np.zeros(1, np.int64),
+    )  # fmt: skip
+    assert STATUS_NAMES[st] == "error" and np.all(np.isnan(U)) and np.isnan(t)
 
 
 @pytest.mark.parametrize("drive", ["constant", "dc-motor"])
