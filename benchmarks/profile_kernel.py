@@ -473,37 +473,38 @@ def _engine_pieces(p_engine, y, n):
         except Exception as exc:  # noqa: BLE001 - signature changed by the rewrite
             notes.append(f"{name}: {type(exc).__name__}")
     try:
-        from stickslip_fast import integrators
-        from stickslip_fast import trajectory as tj
+        # one whole Rosenbrock attempt as the driver makes it: the small-N record, the
+        # Jacobian at y0, then factor, 8 stages and the combination (steppers.rosenbrock_step)
+        from stickslip_fast import problems as pr
+        from stickslip_fast import steppers as sp
 
-        rb_step = integrators.rosenbrock_step
-        G, RA, RC, RB, RE = tj._RB_GAMMA, tj._RB_A, tj._RB_C, tj._RB_B, tj._RB_E
+        M = sp.RODAS5P_METHOD
+        G, RA, RC, RB, RE = M.gamma, M.a, M.C, M.b, M.b_err
+        rb_step = sp.rosenbrock_step
+        shape = pr.small_shape(1, False)
 
         @_nj
-        def loop_step(y, p, jb, jcol, jrow, lu, piv, z, n):
+        def loop_step(y, p, n):
+            prob = pr.make_small(pr.make_stickslip(p, 1, False, np.empty(p.size)), shape)
+            lin = pr.alloc_bordered_linear(1, 4)
             f0 = np.empty(4)
             K = np.empty((RB.size, 4))
             ytmp = np.empty(4)
             ftmp = np.empty(4)
             y1 = np.empty(4)
             err = np.empty(4)
-            rhs_e(y, p, 1, False, f0)
-            jc = jb_e(y, p, 1, False, jb, jcol, jrow)
+            pr.problem_f(prob, y, f0)
+            pr.problem_jac(prob, y, lin)
             acc = 0.0
             for k in range(n):
                 h = 1e-3 * (1 + k % 3)
-                rb_step(
-                    G, RA, RC, RB, RE, y, f0, h, p, 1, False, jb, jcol, jrow, jc, lu, piv, z,
-                    K, ytmp, ftmp, y1, err,
-                )  # fmt: skip
+                rb_step(G, RA, RC, RB, RE, prob, lin, y, f0, h, K, ytmp, ftmp, y1, err)
                 acc += y1[0]
             return acc
 
-        res["rosenbrock_step"] = _ns(
-            loop_step, y.copy(), p_engine, jb, jcol, jrow, lu, piv, z, n=max(n // 4, 10)
-        )
+        res["rosenbrock_step"] = _ns(loop_step, y.copy(), p_engine, n=max(n // 4, 10))
     except Exception as exc:  # noqa: BLE001
-        notes.append(f"rosenbrock_step (old kernel API) not timed: {type(exc).__name__}")
+        notes.append(f"rosenbrock_step not timed: {type(exc).__name__}: {exc}")
     if notes:
         res["note"] = "; ".join(notes)
     return res
