@@ -75,14 +75,14 @@ def machine_info() -> dict:
         info["memory_total_gb"] = round(psutil.virtual_memory().total / 2**30, 1)
     except ImportError:
         pass
-    try:
-        from importlib.metadata import version
+    from importlib.metadata import PackageNotFoundError, version
 
-        import numbalsoda  # noqa: F401
-
-        info["numbalsoda"] = version("numbalsoda")
-    except Exception:  # noqa: BLE001 - optional
-        info["numbalsoda"] = None
+    # the peers' versions (None: not installed, so that peer was not run)
+    for dist in ("numbalsoda", "scikit-sundae", "diffrax", "jax"):
+        try:
+            info[dist] = version(dist)
+        except PackageNotFoundError:
+            info[dist] = None
     return info
 
 

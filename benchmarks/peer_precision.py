@@ -68,6 +68,20 @@ def _engine(system, tr, rtol, integrate_only):
     return r.status, r.t_poincare, r.poincare
 
 
+def _work(name, system, p, tr, rtol) -> dict:
+    """The work behind a timed run: the engine's steps, numbalsoda's RHS calls (untimed)."""
+    if name == "engine rodas5p":
+        r = ssf.simulate(system, tr["t_end"], tr["t_transient"], rtol=rtol,
+                         atol=ATOL_FACTOR * rtol, max_points=10_000)  # fmt: skip
+        # Rodas5P: 7 RHS calls, 1 Jacobian, 1 LU and 8 solves per attempt
+        return dict(steps=int(r.n_steps), rejected=int(r.n_rejected))
+    if name == "numbalsoda LSODA":
+        n = peers.numbalsoda_rhs_evaluations(p, tr["t_end"], tr["t_transient"], rtol,
+                                             ATOL_FACTOR * rtol)  # fmt: skip
+        return dict(rhs_evaluations=n)
+    return {}
+
+
 def solvers(mode: str) -> tuple[dict, dict]:
     """name -> runner(system, p, tr, rtol, integrate_only) -> (status, t_pts, pts); and skips."""
     out = {"engine rodas5p": lambda s, p, tr, rtol, io: _engine(s, tr, rtol, io)}
@@ -212,6 +226,7 @@ def run(mode: str, log) -> dict:
                     time_integration=best[name]["integration"],
                     error=next(s["error"] for s in scans[name] if s["rtol"] == picks[name]),
                 )
+                row.update(_work(name, system, p, tr, picks[name]))
                 if eng and name != "engine rodas5p":
                     row["engine_speedup_points"] = best[name]["points"] / eng["points"]
                     row["engine_speedup_integration"] = (

@@ -214,6 +214,39 @@ def numbalsoda_funcptr() -> int:
     return _NBL["ptr"]
 
 
+def numbalsoda_counting_funcptr() -> int:
+    """As :func:`numbalsoda_funcptr`, but each call adds 1 to ``data[8]`` (data: p, then 0)."""
+    if "count_ptr" not in _NBL:
+        import numba
+        from numbalsoda import lsoda_sig
+
+        @numba.cfunc(lsoda_sig)
+        def f(t, u_, du_, p_):
+            u = numba.carray(u_, (4,))
+            du = numba.carray(du_, (4,))
+            d = numba.carray(p_, (9,))
+            rhs1(u, d[:8], du)
+            d[8] += 1.0
+
+        _NBL["count_cfunc"] = f
+        _NBL["count_ptr"] = f.address
+    return _NBL["count_ptr"]
+
+
+def numbalsoda_rhs_evaluations(p, t_end, t_min, rtol, atol, dt=GRID_DT) -> int:
+    """RHS calls of the :func:`numbalsoda_run` run with points (its FD Jacobian's included).
+
+    LSODA's work counters are not returned by numbalsoda, so the RHS counts its own calls.
+    """
+    from numbalsoda import lsoda
+
+    data = np.append(np.asarray(p, dtype=float), 0.0)
+    g = output_grid(t_end, t_min, dt)
+    lsoda(numbalsoda_counting_funcptr(), np.zeros(4), g, data=data, rtol=rtol, atol=atol,
+          mxstep=MXSTEP)  # fmt: skip
+    return int(data[8])
+
+
 def numbalsoda_run(p, t_end, t_min, rtol, atol, integrate_only=False, dt=GRID_DT):
     """numbalsoda LSODA (its internal finite-difference Jacobian); returns (ok, t_pts, pts)."""
     from numbalsoda import lsoda

@@ -29,7 +29,11 @@ def write_summary(r):
         "",
         f"Machine: {m['cpu_model']}, {m['cores']} cores, {m.get('memory_total_gb', '?')} GB; "
         f"Python {m['python']}, numpy {m['numpy']}, numba {m['numba']}, scipy {m['scipy']}, "
-        f"numbalsoda {m.get('numbalsoda') or 'not installed'}. Load average at start "
+        + ", ".join(
+            f"{d} {m.get(d) or 'not installed'}"
+            for d in ("numbalsoda", "scikit-sundae", "diffrax", "jax")
+        )
+        + f", commit {m.get('git_commit', '?')}. Load average at start "
         f"{', '.join(f'{x:.2f}' for x in m['loadavg_at_start'])}, at end "
         f"{', '.join(f'{x:.2f}' for x in m.get('loadavg_at_end', []))} (shared machine). "
         f"Sweep implementation: `{r['sweep_impl']}`. Total wall time {r['total_wall_s']:.0f} s.",

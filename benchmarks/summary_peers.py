@@ -51,6 +51,15 @@ def headline_rows(sec) -> list[str]:
     return L
 
 
+def _work(r) -> str:
+    """Steps (engine) or RHS calls (numbalsoda) of the timed run, where recorded."""
+    if "steps" in r:
+        return f"{r['steps']} steps + {r['rejected']} rejected"
+    if "rhs_evaluations" in r:
+        return f"{r['rhs_evaluations']} RHS calls"
+    return ""
+
+
 def peers_trajectory(pt) -> list[str]:
     L = ["## Peers: per-trajectory work-precision (issue 11)", ""]
     s = pt["settings"]
@@ -79,17 +88,17 @@ def peers_trajectory(pt) -> list[str]:
             L.append("")
             L.append(
                 "| solver | rtol | error | with points [ms] | integration only [ms] | "
-                "engine speed-up (points) | engine speed-up (integration) |"
+                "engine speed-up (points) | engine speed-up (integration) | work |"
             )
-            L.append("|---|---|---|---|---|---|---|")
+            L.append("|---|---|---|---|---|---|---|---|")
             for name, r in tab["rows"].items():
                 if r.get("rtol") is None:
-                    L.append(f"| {name} | - | - | - | - | - | {r.get('note', '')} |")
+                    L.append(f"| {name} | - | - | - | - | - | {r.get('note', '')} | |")
                     continue
                 L.append(
                     f"| {name} | {r['rtol']:g} | {_e(r['error'])} | {_ms(r['time_points'])} | "
                     f"{_ms(r['time_integration'])} | {_x(r.get('engine_speedup_points'))} | "
-                    f"{_x(r.get('engine_speedup_integration'))} |"
+                    f"{_x(r.get('engine_speedup_integration'))} | {_work(r)} |"
                 )
             L.append("")
         L.append("<details><summary>ladder scans (single untimed-quality runs)</summary>")
