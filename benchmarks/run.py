@@ -122,6 +122,8 @@ def main(argv=None):
             work_precision.plot(sec[name], out / "work_precision.png")
         if name == "n_scaling":
             sweeps.plot(sec, out / "n_scaling.png")
+        if name == "peers_diagram":
+            peer_diagram.plot(sec[name], out / "diagram_work_precision.png")
         (out / "results.json").write_text(json.dumps(_clean(results), indent=1))
     if "merged_runs" in results:  # keep the full run's total; record this one apart
         results["total_wall_s"] = old.get("total_wall_s", 0.0)

@@ -38,6 +38,18 @@ def write_summary(r):
         f"{', '.join(f'{x:.2f}' for x in m.get('loadavg_at_end', []))} (shared machine). "
         f"Sweep implementation: `{r['sweep_impl']}`. Total wall time {r['total_wall_s']:.0f} s.",
         "",
+    ]
+    prev = m.get("previous_run_machine")
+    if r.get("merged_runs") and isinstance(prev, dict):
+        merged = ", ".join(s for run in r["merged_runs"] for s in run)
+        L += [
+            f"Sections re-run later and merged into this file: {merged} (the machine line "
+            f"above is the latest merge's). The full run: commit {prev.get('git_commit', '?')}, "
+            "load average at start "
+            f"{', '.join(f'{x:.2f}' for x in prev.get('loadavg_at_start', []))}.",
+            "",
+        ]
+    L += [
         "## Headline",
         "",
         "| measure | value | target | verdict |",

@@ -151,6 +151,12 @@ def peers_diagram(pd) -> list[str]:
             f"{'n/a' if t is None else f'{t:.3g}'}{extra} | {_x(rec.get('engine_speedup'))} | {scan} |"
         )
     L.append("")
+    L.append(
+        "![diagram work-precision](diagram_work_precision.png) (each solver's ladder: share of "
+        "the values agreeing with the reference against the time for all values; open markers: "
+        "extrapolated from the values run; the chosen rung at its re-timed time)"
+    )
+    L.append("")
     return L
 
 
