@@ -657,3 +657,82 @@ def run(mode: str, log) -> dict:
     out["near"] = NEAR
     out["loadavg_at_end"] = list(os.getloadavg())
     return out
+
+
+# ------------------------------------------------- Jacobian share at large N (W-method bound)
+def jacobian_share(n_list=(1, 8, 64, 512), n_calls=2000) -> dict:
+    """ns per call of the generic kernel's pieces for N disks on a DC motor, and the share
+    of one Rodas5P attempt (7 RHS, 1 Jacobian, 1 factor, 8 solves) that the Jacobian and
+    the factorisation take: the most that reusing them (a W-method) could save per attempt.
+
+    ``python3 -c "from benchmarks.profile_kernel import jacobian_share as j; print(j())"``
+    """
+    from numba import njit as _nj
+
+    from stickslip_fast import linalg, model
+    from stickslip_fast.params import P_ETA, P_ETAP, eta_prime
+
+    rhs_e, jb_e, wf, ws = model.rhs, model.jacobian_blocks, linalg.w_factor, linalg.w_solve
+
+    @_nj
+    def loop_rhs(y, p, n_osc, out, n):
+        acc = 0.0
+        for k in range(n):
+            y[1] = 1e-3 * (k % 7) - 2e-3
+            rhs_e(y, p, n_osc, True, out)
+            acc += out[1]
+        return acc
+
+    @_nj
+    def loop_jac(y, p, n_osc, jb, jcol, jrow, n):
+        acc = 0.0
+        for k in range(n):
+            y[1] = 1e-3 * (k % 7) - 2e-3
+            acc += jb_e(y, p, n_osc, True, jb, jcol, jrow)
+        return acc
+
+    @_nj
+    def loop_factor(y, p, n_osc, jb, jcol, jrow, lu, piv, z, n):
+        jc = jb_e(y, p, n_osc, True, jb, jcol, jrow)
+        acc = 0.0
+        for k in range(n):
+            acc += wf(10.0 + (k % 5), jb, jcol, jrow, jc, n_osc, True, lu, piv, z)
+        return acc
+
+    @_nj
+    def loop_solve(y, p, n_osc, jb, jcol, jrow, lu, piv, z, b, n):
+        jc = jb_e(y, p, n_osc, True, jb, jcol, jrow)
+        schur = wf(10.0, jb, jcol, jrow, jc, n_osc, True, lu, piv, z)
+        acc = 0.0
+        for k in range(n):
+            b[0] = 1.0 + (k % 3)
+            ws(lu, piv, z, jrow, schur, n_osc, True, b)
+            acc += b[0]
+        return acc
+
+    out = {}
+    for n_osc in n_list:
+        s = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=n_osc)
+        p = s.to_array()
+        p[P_ETAP] = eta_prime(p[P_ETA])
+        n = s.n_state
+        rng = np.random.default_rng(0)
+        y = 0.01 * rng.standard_normal(n)
+        jb, jcol, jrow = np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4)), np.zeros((n_osc, 4))
+        lu, piv = np.zeros((n_osc, 4, 4)), np.zeros((n_osc, 4), np.int64)
+        z = np.zeros((n_osc, 4))
+        calls = max(10, n_calls // n_osc)
+        t = dict(
+            rhs=_ns(loop_rhs, y.copy(), p, n_osc, np.empty(n), n=calls),
+            jacobian=_ns(loop_jac, y.copy(), p, n_osc, jb, jcol, jrow, n=calls),
+            factor=_ns(loop_factor, y.copy(), p, n_osc, jb, jcol, jrow, lu, piv, z, n=calls),
+            solve=_ns(
+                loop_solve, y.copy(), p, n_osc, jb, jcol, jrow, lu, piv, z, np.ones(n), n=calls
+            ),  # fmt: skip
+        )
+        attempt = 7 * t["rhs"] + t["jacobian"] + t["factor"] + 8 * t["solve"]
+        out[n_osc] = dict(
+            ns=t, attempt_ns=attempt,
+            jacobian_and_factor_share=(t["jacobian"] + t["factor"]) / attempt,
+        )  # fmt: skip
+    return out
