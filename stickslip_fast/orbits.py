@@ -41,7 +41,6 @@ coordinate directions.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -330,7 +329,7 @@ def _sensitivity_params(system: System, param: str | None, rel_step: float):
 
     def at(v):
         try:
-            return dataclasses.replace(system, **{param: v}).to_array(), v
+            return system.replace(**{param: v}).to_array(), v
         except ValueError:  # outside the parameter's valid range
             return None
 

@@ -137,7 +137,8 @@ StickSlipTangentSmall = namedtuple(
 )
 #: The sensitivity s = dy/dlambda to one parameter, s' = J s + df/dlambda, whose
 #: row of the exact Jacobian is [H(s) + dJ/dlambda, J]. ``p2`` holds the packed
-#: parameters at lambda + h and lambda - h (eta' filled in), ``inv`` = 1 / (2 h):
+#: parameters at lambda + h and lambda - h (eta' filled in; one row at lambda itself at
+#: the edge of its valid range), ``inv`` = 1 / (their difference in lambda):
 #: df/dlambda and dJ/dlambda are central differences of the model's f and J,
 #: which carry no integration error. ``jb``, ``jcol``, ``jrow``, ``corner`` hold
 #: dJ/dlambda at the last Jacobian's point, ``mjb``, ``mjcol``, ``mjrow`` and
