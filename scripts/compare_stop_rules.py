@@ -34,8 +34,33 @@ def _cycle_distance(a: np.ndarray, b: np.ndarray) -> float:
     return min(float(np.abs(np.roll(b, k, axis=0) - a).max()) for k in range(len(a)))
 
 
-def compare(num: int, num_2d: int, tol: float, only: str | None):
-    rows, bad = [], []
+def agreement(st_a, pe_a, pts_a, cnt_a, st_b, pe_b, pts_b, cnt_b, tol: float):
+    """Per value: do two diagrams agree, and how far apart are their last cycles.
+
+    Agreement: same status and period and, for orbits, the last ``period`` points
+    within ``tol`` (max norm) up to a cyclic shift. Returns (bool array, distance array;
+    distance 0 where no cycle was compared).
+    """
+    ok = np.zeros(st_a.size, dtype=bool)
+    dist = np.zeros(st_a.size)
+    for i in range(st_a.size):
+        ok[i] = st_a[i] == st_b[i] and pe_a[i] == pe_b[i]
+        if ok[i] and st_a[i] == "ok" and pe_a[i] > 0:
+            p = int(pe_a[i])
+            a = pts_a[i, cnt_a[i] - p : cnt_a[i]]
+            b = pts_b[i, cnt_b[i] - p : cnt_b[i]]
+            dist[i] = _cycle_distance(a, b)
+            ok[i] = dist[i] <= tol
+    return ok, dist
+
+
+def sweep_configs(num: int, num_2d: int, only: str | None):
+    """Every sweep config in data/ on a grid over its own range.
+
+    Yields (path, config, param, values, sweep keyword arguments): ``num`` values for a
+    1-D sweep, ``num_2d`` per axis of a 2-D one; the config's integration settings,
+    start and mode.
+    """
     for path in sorted((ROOT / "data").glob("*.toml")):
         if only and only not in path.name:
             continue
@@ -49,6 +74,12 @@ def compare(num: int, num_2d: int, tol: float, only: str | None):
             values = np.linspace(cfg.sweep["values"][0], cfg.sweep["values"][-1], num)
         kw = dict(cfg.integration)
         kw.update(y0=cfg.y0, mode=cfg.sweep.get("mode", "restart"), progress=False)
+        yield path, cfg, param, values, kw
+
+
+def compare(num: int, num_2d: int, tol: float, only: str | None):
+    rows, bad = [], []
+    for path, cfg, param, values, kw in sweep_configs(num, num_2d, only):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             t0 = time.perf_counter()
@@ -70,23 +101,14 @@ def compare(num: int, num_2d: int, tol: float, only: str | None):
         )
         if cfg.sweep.get("mode") == "continuation-both":
             grid = np.concatenate([grid, grid])
-        agree = 0
-        for i in range(st_f.size):
-            ok = st_f[i] == st_c[i] and pe_f[i] == pe_c[i]
-            dist = 0.0
-            if ok and st_f[i] == "ok" and pe_f[i] > 0:
-                p = int(pe_f[i])
-                a = pts_f[i, cnt_f[i] - p : cnt_f[i]]
-                b = pts_c[i, cnt_c[i] - p : cnt_c[i]]
-                dist = _cycle_distance(a, b)
-                ok = dist <= tol
-            agree += ok
-            if not ok:
-                bad.append(dict(
-                    config=path.stem, value=" ".join(f"{x:.6g}" for x in grid[i]),
-                    fixed=f"{st_f[i]}/P{pe_f[i]}", converged=f"{st_c[i]}/P{pe_c[i]}",
-                    distance=f"{dist:.3g}", t_converged=f"{tc[i]:.1f}",
-                ))  # fmt: skip
+        ok, dist = agreement(st_f, pe_f, pts_f, cnt_f, st_c, pe_c, pts_c, cnt_c, tol)
+        agree = int(ok.sum())
+        for i in np.flatnonzero(~ok):
+            bad.append(dict(
+                config=path.stem, value=" ".join(f"{x:.6g}" for x in grid[i]),
+                fixed=f"{st_f[i]}/P{pe_f[i]}", converged=f"{st_c[i]}/P{pe_c[i]}",
+                distance=f"{dist[i]:.3g}", t_converged=f"{tc[i]:.1f}",
+            ))  # fmt: skip
         finite = tc[np.isfinite(tc)]
         rows.append(dict(
             config=path.stem, values=st_f.size, agree=agree,
