@@ -360,9 +360,43 @@ def _tangent(DG: np.ndarray, prev: np.ndarray) -> np.ndarray:
     return t / np.linalg.norm(t)
 
 
+#: What :func:`_correct` returns in place of (G, DG, A) when it stopped at the residual's
+#: round-off floor: converged as far as the arithmetic allows, but not to ``tol``.
+NOISE_FLOOR = "noise-floor"
+
+
+def _round_off_floor(DG: np.ndarray, x: np.ndarray) -> float:
+    """eps ||DG|| ||x|| (max norms): the residual that rounding errors of x's size can cause.
+
+    The evaluation noise of a strongly unstable orbit's return map scales with its
+    Jacobian: past the upper fold of Fig. 6's period-1 branch (multiplier 1e2 to 4e3), G
+    at x and at x moved by ~1e-14 relative differ from the linear prediction by up to
+    0.09-0.35 times this (rtol 1e-11 and 1e-13; docs/orbits.md, "Cost").
+    """
+    return float(np.finfo(float).eps * np.max(np.abs(DG).sum(axis=1)) * np.max(np.abs(x)))
+
+
 def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
-    """Newton on [G(x); normal . (x - anchor)] = 0 from x_pred."""
+    """Newton on [G(x); normal . (x - anchor)] = 0 from x_pred.
+
+    Converged when max |G| <= tol and |normal . (x - anchor)| <= tol. Fails early
+    (docs/orbits.md, "Cost") where more iterations would only resample the
+    evaluation's noise:
+
+    - at the round-off floor: the Newton update is below ``tol`` and max |G|,
+      above ``tol``, is below :func:`_round_off_floor` and did not halve in this
+      iteration (returned with :data:`NOISE_FLOOR` in place of the data);
+    - stalled: in Newton's local regime (update below sqrt(tol)), two iterations
+      in a row did not halve the smallest residual so far.
+
+    Neither accepts a point the plain test would reject.
+
+    Returns
+    -------
+    (converged, x, (G, DG, A) or None or NOISE_FLOOR, iterations)
+    """
     x = x_pred.copy()
+    best, stalled = math.inf, 0
     for it in range(max_iter + 1):
         ok, G, DG, A = evaluate(x)
         if not ok:
@@ -371,13 +405,24 @@ def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
         h = float(normal @ (x - anchor))
         if res <= tol and abs(h) <= tol:
             return True, x, (G, DG, A), it
-        if it == max_iter:
-            break
+        # Newton near a root gains digits quadratically: a residual that does not halve
+        # is noise (the integration's or the rounding's), not progress
+        if res < 0.5 * best:
+            best, stalled = res, 0
+        else:
+            stalled += 1
         J = np.vstack([DG, normal[None, :]])
         try:
             dx = np.linalg.solve(J, -np.r_[G, h])
         except np.linalg.LinAlgError:
             return False, x, None, it
+        step = float(np.max(np.abs(dx)))
+        if stalled and step <= tol and abs(h) <= tol and res <= _round_off_floor(DG, x):
+            return False, x, NOISE_FLOOR, it
+        if stalled >= 2 and step <= math.sqrt(tol):
+            return False, x, None, it
+        if it == max_iter:
+            break
         x = x + dx
         if not np.all(np.isfinite(x)):
             return False, x, None, it
@@ -490,7 +535,8 @@ def pseudo_arclength(
         "bounds", "max-points", "step-too-small" (the corrector failed),
         "nonsmooth" (steps kept jumping off the branch) or "precision-limit"
         (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
-        less than ``ds_min``).
+        less than ``ds_min``; or the last corrector stopped at the residual's
+        round-off floor, :func:`_correct`, with no stage left).
     """
     ok, G, DG, A = evaluate(x0)
     if not ok:
@@ -513,6 +559,7 @@ def pseudo_arclength(
         x = xs[-1]
         accepted = False
         jumped = False
+        floored = False  # the last rejection: a corrector at the round-off floor
         on_bound = False
         while ds >= ds_min:
             x_pred = x + ds * t
@@ -527,10 +574,12 @@ def pseudo_arclength(
                     on_bound = True
                     accepted = True
                     break
+                floored = data is NOISE_FLOOR
                 ds *= 0.5
                 continue
             okc, x_new, data, its = _correct(evaluate, x_pred, t, x_pred, tol, max_corrector)
             jumped = False
+            floored = data is NOISE_FLOOR
             if okc:
                 jumped = bool(jump is not None and jump(x, x_new))
                 # a corrector that went far from the predictor has left the branch
@@ -548,6 +597,8 @@ def pseudo_arclength(
                     ds, ds_min = ds_min, min(ds_min, ds_min_next)
             if restart is None:
                 status = "nonsmooth" if jumped else "step-too-small"
+                if floored:  # the residual's noise, not the step, stopped the corrector
+                    status = "precision-limit"
                 break
             j, x_re, (_, DG, A) = restart
             t = _tangent(DG, xs[j] - xs[j - 1] if j > 0 else t)

@@ -8,13 +8,17 @@ orbit continuation against brute-force simulation of the engine. About 10 s warm
 from __future__ import annotations
 
 import dataclasses
+import math
+import zlib
 
 import numpy as np
 import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.continuation import (
+    NOISE_FLOOR,
     Branch,
+    _correct,
     continue_orbit,
     period_doubling_start,
     pseudo_arclength,
@@ -88,6 +92,95 @@ def test_neimark_sacker_is_located():
     xs, mults, bifs, status = pseudo_arclength(ns_map, np.array([0.0, 0.0, 0.5]), 1.0, (0.0, 2.0), **KW)  # fmt: skip
     assert [b[0] for b in bifs] == ["neimark-sacker"]
     assert abs(bifs[0][1] - 1.0) < 1e-8
+
+
+EPS = np.finfo(float).eps
+
+
+def _noise(x, amplitude):
+    # deterministic, zero-mean "evaluation noise": a function of x's bits, like the
+    # integration's (the same x gives the same value, a neighbouring x an unrelated one)
+    return amplitude * (2.0 * zlib.crc32(x.tobytes()) / 2**32 - 1.0)
+
+
+def steep_fold_map(x, k=30.0, count=None):
+    # G1 = (lam - z1^2) exp(-k z1): the fold of fold_pd_map at lam = 0 (same fixed points
+    # z1 = +-sqrt(lam)), but on the unstable side the multiplier 1 + 2 |z1| exp(k |z1|)
+    # grows exponentially, like the saddle orbits past Fig. 6's folds. Each evaluation
+    # carries noise of 0.3 eps ||DG|| ||x||, as measured on those (docs/orbits.md, "Cost").
+    if count is not None:
+        count.append(1)
+    z1, z2, lam = x
+    w = math.exp(-k * z1)
+    g = lam - z1 * z1
+    g_z = (-2.0 * z1 - k * g) * w
+    DG = np.array([[g_z, 0.0, w], [0.0, -0.5, 0.0]])
+    floor = EPS * np.abs(DG).sum(axis=1).max() * np.abs(x).max()
+    G = np.array([g * w + _noise(x, 0.3 * floor), -0.5 * z2])
+    return True, G, DG, np.diag([1.0 + g_z, 0.5])
+
+
+def test_the_corrector_stops_at_the_round_off_floor():
+    """Where eps ||DG|| ||x|| exceeds tol, Newton stops when its update is below tol."""
+    lam = 0.25  # unstable fixed point z1 = -0.5, multiplier 1 + exp(15) = 3.3e6
+    e_lam = np.array([0.0, 0.0, 1.0])
+    count = []
+    x_pred = np.array([-0.5 + 1e-8, 0.0, lam])
+    ok, x, data, _ = _correct(lambda x: steep_fold_map(x, count=count), x_pred, e_lam, x_pred,
+                              1e-12, 6)  # fmt: skip
+    # the floor (~1e-9) is above tol: no evaluation meets tol, and the plain test would
+    # spend all 7; stopped once the update is below tol and the residual no longer
+    # halves (here at the 4th), at the analytic root
+    assert not ok and data is NOISE_FLOOR and len(count) < 7
+    assert abs(x[0] + 0.5) <= 1e-12 and x[2] == lam
+    # on fold_pd_map (the same fixed point, no noise, multiplier 2) it meets tol
+    ok, x, _, _ = _correct(fold_pd_map, x_pred, e_lam, x_pred, 1e-12, 6)
+    assert ok and abs(x[0] + 0.5) <= 1e-12
+
+
+def test_the_corrector_gives_up_when_noise_stalls_it():
+    """Noise far above the round-off floor (as near a sharp fold): two iterations without
+    halving the residual, in Newton's local regime, end the corrector."""
+
+    def noisy_linear(x):  # G = z - (0.3, -0.2) plus noise 1e-9; root at the analytic point
+        count.append(1)
+        DG = np.hstack([np.eye(2), np.zeros((2, 1))])
+        G = x[:2] - np.array([0.3, -0.2]) + _noise(x, 1e-9)
+        return True, G, DG, np.zeros((2, 2))
+
+    count = []
+    e_lam = np.array([0.0, 0.0, 1.0])
+    x_pred = np.array([0.31, -0.19, 1.0])
+    ok, x, data, _ = _correct(noisy_linear, x_pred, e_lam, x_pred, 1e-12, 6)
+    assert not ok and data is None and len(count) < 7
+    np.testing.assert_allclose(x[:2], [0.3, -0.2], atol=2e-9)
+
+
+def test_a_branch_ends_at_the_precision_limit_of_a_noisy_map():
+    """End to end: the steep fold is passed and located, the unstable side followed
+    until the analytic round-off floor passes tol, and the end is "precision-limit"."""
+    count = []
+    tol = 1e-12
+    xs, mults, bifs, status = pseudo_arclength(
+        lambda x: steep_fold_map(x, count=count), np.array([0.5, 0.0, 0.25]), -1.0,
+        (-1.0, 1.5), **dict(KW, tol=tol),
+    )  # fmt: skip
+    assert [b[0] for b in bifs] == ["fold"] and abs(bifs[0][1]) < 1e-8
+    assert status == "precision-limit"
+    z1, lam = xs[:, 0], xs[:, 2]
+    w = np.exp(-30.0 * z1)
+    g_z = (-2.0 * z1 - 30.0 * (lam - z1 * z1)) * w
+    floor = EPS * (np.abs(g_z) + w) * np.maximum(np.abs(z1), np.abs(lam))
+    # every point on the analytic branch to tol plus the noise it was evaluated with
+    assert np.all(np.abs(lam - z1 * z1) * w <= tol + 0.3 * floor)
+    # not cut short: the last point is where the floor exceeds tol (from 1.4e-16 at the
+    # start), on the unstable side with a multiplier > 1e4
+    assert floor[0] < 1e-3 * tol and floor[-1] > tol
+    assert z1[-1] < -0.3 and mults[-1, 0].real > 1e4
+    # the plain corrector needs 588 evaluations and 72 points for this branch (and ends
+    # "step-too-small"): failing correctors at the floor ran all 7 iterations (191 and 23
+    # points with the stop rules)
+    assert len(count) < 300
 
 
 @pytest.fixture(scope="module")
