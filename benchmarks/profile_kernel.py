@@ -34,12 +34,17 @@ import time
 import numpy as np
 from numba import njit
 
+# the engine's own step-size controller, so that replica and engine take the same steps
+from stickslip_fast.steppers import PI_ALPHA, PI_BETA
+from stickslip_fast.steppers import STEP_FAC_MAX as FAC_MAX
+from stickslip_fast.steppers import STEP_FAC_MIN as FAC_MIN
+from stickslip_fast.steppers import STEP_SAFETY as SAFETY
+
 from . import peers
 from .common import ssf
 from .reference import trajectory_reference
 
 ATOL_FACTOR = 1e-2
-SAFETY, FAC_MIN, FAC_MAX, PI_ALPHA, PI_BETA = 0.9, 0.2, 6.0, 0.7, 0.4
 STICK_V = 1e-3  # |dx1 - v_b| below this (100 eps) counts as sticking
 NEAR = 0.05  # an attempt within this time of a stick<->slip switch is "at a transition"
 
