@@ -270,7 +270,7 @@ def write_summary(r):
             "",
         ]
     if su:
-        c, w = su["cold"], su["cached"]
+        rows = [("empty cache", su["cold"]), ("cached", su["cached"])]
         L += [
             "## Start-up",
             "",
@@ -278,12 +278,16 @@ def write_summary(r):
             "",
             "| process | total wall [s] | import [s] | first simulate [s] | first sweep [s] |",
             "|---|---|---|---|---|",
-            f"| empty cache | {c['process_wall_s']:.2f} | {c['import_s']:.2f} | "
-            f"{c['first_simulate_s']:.2f} | {_f(c.get('first_sweep_s'), '{:.2f}')} |",
-            f"| cached | {w['process_wall_s']:.2f} | {w['import_s']:.2f} | "
-            f"{w['first_simulate_s']:.2f} | {_f(w.get('first_sweep_s'), '{:.2f}')} |",
-            "",
         ]
+        for name, proc in rows:
+            if proc is None:
+                L.append(f"| {name} | not run (quick mode) | | | |")
+                continue
+            L.append(
+                f"| {name} | {proc['process_wall_s']:.2f} | {proc['import_s']:.2f} | "
+                f"{proc['first_simulate_s']:.2f} | {_f(proc.get('first_sweep_s'), '{:.2f}')} |"
+            )
+        L.append("")
     if me:
         L += ["## Memory", ""]
         if me["status"] == "ok":

@@ -1,7 +1,7 @@
 """Smoke test of the benchmark suite: `benchmarks/run.py --quick` runs and writes its files.
 
-Checks structure, not timings. Takes about a minute on 2 cores (most of it the
-start-up benchmark compiling into an empty Numba cache).
+Checks structure, not timings. Quick mode skips the start-up benchmark's empty-cache
+run (it compiled every kernel again: ~75 s of the suite); the full run keeps it.
 """
 
 from __future__ import annotations
