@@ -4,7 +4,10 @@ For each sweep config: a 50-value grid over its own range (each axis of a 2-D
 sweep gets 7 values), with the config's integration settings and mode. For each
 single-run config: the run itself (points, samples, final state). Also a
 Lyapunov exponent on two presets, and periodic orbits with their multipliers
-(``--only orbits``). Everything goes into one ``.npz`` file;
+(``--only orbits``). Each census config of data/census/ runs through the CLI on a
+50-value grid with 4 starts, and each continuation config of data/continuation/
+through the CLI with at most 8 points (``--only census`` / ``--only continue``);
+their result files' datasets go into the snapshot. Everything goes into one ``.npz`` file;
 ``--compare OLD.npz`` then reports, array by array, whether the new results
 are bit-identical and the largest difference where they are not.
 
@@ -18,7 +21,9 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -81,6 +86,78 @@ def snapshot(only: str | None = None) -> dict[str, np.ndarray]:
     if not only or "orbits" in only:
         out.update(_orbits())
         print("orbits: done", file=sys.stderr, flush=True)
+    if not only or "census" in only:
+        out.update(_cli_runs("census", CENSUS_GRID))
+    if not only or "continue" in only:
+        out.update(_cli_runs("continuation", CONTINUE_POINTS))
+    return out
+
+
+CENSUS_GRID = 50  # values per census config (4 starts each)
+CONTINUE_POINTS = 8  # points per continuation config
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
+    return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+
+
+def _toml(data: dict) -> str:
+    """A minimal TOML writer for the raw mapping of a config (tomllib only reads)."""
+    lines = [f"{k} = {_toml_value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for k, v in data.items():
+        if isinstance(v, dict):
+            lines.append(f"[{k}]")
+            lines += [f"{kk} = {_toml_value(vv)}" for kk, vv in v.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _h5_arrays(path: Path, key: str) -> dict[str, np.ndarray]:
+    import h5py
+
+    out: dict[str, np.ndarray] = {}
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset):
+            a = obj[()]
+            out[f"{key}/{name}"] = np.asarray(a).astype("U64") if a.dtype.kind in "OSU" else a
+
+    with h5py.File(path, "r") as h5:
+        h5.visititems(visit)
+    return out
+
+
+def _cli_runs(folder: str, size: int) -> dict[str, np.ndarray]:
+    """Run every config of data/<folder>/ through the CLI, cut down to ``size``."""
+    from stickslip_fast.cli import main as cli_main
+
+    out: dict[str, np.ndarray] = {}
+    for path in sorted((ROOT / "data" / folder).glob("*.toml")):
+        cfg = load_config(path)
+        raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in cfg.raw.items()}
+        if folder == "census":
+            vals = np.asarray(cfg.census["values"], dtype=float)
+            raw["census"]["values"] = [float(x) for x in _grid(vals, size)]
+            raw["census"]["n_starts"] = 4
+            cmd = "census"
+        else:
+            raw["continue"]["max_points"] = size
+            cmd = "continue"
+        with tempfile.TemporaryDirectory() as tmp:
+            cfg_path, res_path = Path(tmp) / path.name, Path(tmp) / "out.h5"
+            cfg_path.write_text(_toml(raw))
+            rc = cli_main([cmd, str(cfg_path), "-o", str(res_path), "--quiet"])
+            out[f"{folder}_{path.stem}/rc"] = np.array(rc)
+            for res in sorted(Path(tmp).glob("*.h5")):
+                out.update(_h5_arrays(res, f"{folder}_{path.stem}/{res.name}"))
+        print(f"{folder}/{path.stem}: done", file=sys.stderr, flush=True)
     return out
 
 
