@@ -106,4 +106,4 @@ def best_time(fn, max_repeats: int = 3, budget: float = 1.0):
 
 
 run_sweep = ssf.sweep
-SWEEP_IMPL = "stickslip_fast.sweep"
+SWEEP_IMPL = "stickslip_fast.analysis.sweep"

@@ -56,7 +56,7 @@ SETTINGS = {"full": dict(rounds=5, quick=False), "quick": dict(rounds=1, quick=T
 
 def _worker(name: str, mode: str, scan: bool, picks: dict | None) -> dict:
     """In a fresh process: set the controller's gains, then scan and/or time."""
-    from stickslip_fast import steppers
+    from stickslip_fast.core import steppers
 
     alpha, beta, _ = CONTROLLERS[name]
     steppers.PI_ALPHA, steppers.PI_BETA = alpha, beta  # before any kernel compiles

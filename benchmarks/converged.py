@@ -74,7 +74,7 @@ def fixed_sweep_generic(system, values, kw, fixed_result, log) -> float:
     records (2026-11-23) this was "today's 1000-value fixed sweep" of the census issue's
     cost target; since then the generic kernel is ~4x faster too (docs/census.md).
     """
-    from stickslip_fast import chunks
+    from stickslip_fast.backends import local as chunks
 
     small = chunks.kernel_variant
     chunks.kernel_variant = lambda n_osc, dc: ()

@@ -38,8 +38,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast import backends  # noqa: E402
-from stickslip_fast.sweep import sweep  # noqa: E402
+from stickslip_fast.analysis.sweep import sweep  # noqa: E402
+from stickslip_fast.backends import dask as backends  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 

@@ -78,13 +78,13 @@ import numba  # noqa: E402
 from numba import cuda  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast import cuda_backend as cb  # noqa: E402
-from stickslip_fast.chunks import (  # noqa: E402
+from stickslip_fast.backends import cuda as cb  # noqa: E402
+from stickslip_fast.backends.local import (  # noqa: E402
     WorkUnit,
     compute_continuation_chunk,
     compute_restart_chunk,
 )
-from stickslip_fast.settings import Settings  # noqa: E402
+from stickslip_fast.core.settings import Settings  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from common import cpu_model  # noqa: E402
@@ -546,7 +546,7 @@ def main(argv=None) -> int:
             (f"Fig. 6, {n} values", ("eta",), np.linspace(1.0, 10.0, n)[:, None], conv, None)
         )
     if args.census_values:
-        from stickslip_fast.census import _check_starts
+        from stickslip_fast.analysis.census import _check_starts
 
         nv = args.census_values
         starts, _ = _check_starts(asym, 64, None, None, 0, True, "eta", np.array([2.0]))

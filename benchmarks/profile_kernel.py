@@ -14,7 +14,7 @@ t_end 1500 (points after 1000):
    8 solves, norm + controller) against the measured cost per attempt gives the
    share of bookkeeping.
 3. A replica driver (:func:`rb_integrate`): the same Rodas5P tableau (from
-   ``stickslip_fast.tableaus``, as data), the same PI controller constants, dense
+   ``stickslip_fast.core.tableaus``, as data), the same PI controller constants, dense
    4x4 arithmetic and nothing else; its step log classifies every attempt as near a
    stick-slip transition or not. The same driver runs ROS34PW2 (Rang & Angermann
    2005, 4-stage W-method of order 3; coefficients converted to the transformed form
@@ -35,10 +35,10 @@ import numpy as np
 from numba import njit
 
 # the engine's own step-size controller, so that replica and engine take the same steps
-from stickslip_fast.steppers import PI_ALPHA, PI_BETA
-from stickslip_fast.steppers import STEP_FAC_MAX as FAC_MAX
-from stickslip_fast.steppers import STEP_FAC_MIN as FAC_MIN
-from stickslip_fast.steppers import STEP_SAFETY as SAFETY
+from stickslip_fast.core.steppers import PI_ALPHA, PI_BETA
+from stickslip_fast.core.steppers import STEP_FAC_MAX as FAC_MAX
+from stickslip_fast.core.steppers import STEP_FAC_MIN as FAC_MIN
+from stickslip_fast.core.steppers import STEP_SAFETY as SAFETY
 
 from . import peers
 from .common import ssf
@@ -52,7 +52,7 @@ NEAR = 0.05  # an attempt within this time of a stick<->slip switch is "at a tra
 # ------------------------------------------------------------------- tableaus
 def rodas5p():
     """(gamma, A, C, M, E, q) of the engine's Rodas5P, transformed form, E = M - M_hat."""
-    from stickslip_fast.tableaus import RODAS5P as R
+    from stickslip_fast.core.tableaus import RODAS5P as R
 
     return (
         float(R.gamma), np.asarray(R.a, float), np.asarray(R.C, float), np.asarray(R.b, float),
@@ -393,14 +393,15 @@ def _engine_pieces(p_engine, y, n):
 
     from numba import njit as _nj
 
-    from stickslip_fast import linalg, model
+    from stickslip_fast.model import equations as model
+    from stickslip_fast.model import linalg
 
     res = {}
     notes = []
     rhs_e, jb_e = model.rhs, model.jacobian_blocks
     wf, ws = linalg.w_factor, linalg.w_solve
     en_e = None
-    for modname in ("stickslip_fast.problems", "stickslip_fast.integrators"):
+    for modname in ("stickslip_fast.core.problems", "stickslip_fast.integrators"):
         try:
             en_e = importlib.import_module(modname).error_norm
             break
@@ -480,8 +481,8 @@ def _engine_pieces(p_engine, y, n):
     try:
         # one whole Rosenbrock attempt as the driver makes it: the small-N record, the
         # Jacobian at y0, then factor, 8 stages and the combination (steppers.rosenbrock_step)
-        from stickslip_fast import problems as pr
-        from stickslip_fast import steppers as sp
+        from stickslip_fast.core import problems as pr
+        from stickslip_fast.core import steppers as sp
 
         M = sp.RODAS5P_METHOD
         G, RA, RC, RB, RE = M.gamma, M.a, M.C, M.b, M.b_err
@@ -674,8 +675,9 @@ def jacobian_share(n_list=(1, 8, 64, 512), n_calls=2000) -> dict:
     """
     from numba import njit as _nj
 
-    from stickslip_fast import linalg, model
-    from stickslip_fast.params import P_ETA, P_ETAP, eta_prime
+    from stickslip_fast.model import equations as model
+    from stickslip_fast.model import linalg
+    from stickslip_fast.model.params import P_ETA, P_ETAP, eta_prime
 
     rhs_e, jb_e, wf, ws = model.rhs, model.jacobian_blocks, linalg.w_factor, linalg.w_solve
 

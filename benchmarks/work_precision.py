@@ -7,7 +7,7 @@ and the reference points, matched one to one in time order (a run that finds
 a different number of points near the reference times counts as failed).
 
 SciPy gets the engine's own compiled RHS and analytic Jacobian
-(``stickslip_fast.model.rhs`` / ``dense_jacobian``) behind a thin Python
+(``stickslip_fast.model.equations.rhs`` / ``dense_jacobian``) behind a thin Python
 wrapper, so the comparison is between integrators, not RHS implementations.
 """
 
@@ -143,7 +143,7 @@ def scipy_problem(system, rhs_kind="compiled"):
             lambda t, y: scipy_model.rhs(t, y, params),
             lambda t, y: scipy_model.jac(t, y, params),
         )
-    from stickslip_fast.model import dense_jacobian, rhs
+    from stickslip_fast.model.equations import dense_jacobian, rhs
 
     p = system.to_array()
     n_osc = system.n_oscillators

@@ -21,7 +21,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from stickslip_fast.census import CensusResult, load_census  # noqa: E402
+from stickslip_fast.analysis.census import CensusResult, load_census  # noqa: E402
 
 __all__ = ["transitions", "main"]
 

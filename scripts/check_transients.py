@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast.config import load_config  # noqa: E402
+from stickslip_fast.cli.config import load_config  # noqa: E402
 
 __all__ = ["orbit_distance", "compare", "main"]
 

@@ -52,12 +52,12 @@ from compare_stop_rules import agreement, sweep_configs  # noqa: E402
 def _worker(alpha: float, beta: float, rtol: float | None, num: int, num_2d: int,
             only: str | None, out: Path) -> None:  # fmt: skip
     """In a fresh process: set the gains, run every sweep config, save the diagrams."""
-    from stickslip_fast import steppers
+    from stickslip_fast.core import steppers
 
     steppers.PI_ALPHA, steppers.PI_BETA = alpha, beta  # before any kernel compiles
 
     import stickslip_fast as ssf
-    from stickslip_fast.settings import DEFAULT_RTOL, period_tolerance
+    from stickslip_fast.core.settings import DEFAULT_RTOL, period_tolerance
 
     arrays: dict[str, np.ndarray] = {}
     for path, cfg, param, values, kw in sweep_configs(num, num_2d, only):

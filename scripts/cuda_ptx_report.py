@@ -51,7 +51,7 @@ def main(argv=None) -> int:
     if os.environ.get("NUMBA_ENABLE_CUDASIM") == "1":
         print("unset NUMBA_ENABLE_CUDASIM: this compiles for the real target", file=sys.stderr)
         return 2
-    from stickslip_fast import cuda_backend as cb
+    from stickslip_fast.backends import cuda as cb
 
     cc = tuple(int(x) for x in args.cc.split("."))
     ptxas = find_ptxas()

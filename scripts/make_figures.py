@@ -39,7 +39,7 @@ import plot_bifurcation  # noqa: E402
 import plot_timeseries  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast.config import RunConfig, load_config  # noqa: E402
+from stickslip_fast.cli.config import RunConfig, load_config  # noqa: E402
 from stickslip_fast.io import _jsonable, write_trajectory  # noqa: E402
 
 __all__ = ["FIGURES", "Figure", "run_config", "make_figures", "main"]

@@ -61,8 +61,8 @@ from matplotlib.patches import Patch  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+from stickslip_fast.core.poincare import STATUS_NAMES  # noqa: E402
 from stickslip_fast.io import read_sweep  # noqa: E402
-from stickslip_fast.poincare import STATUS_NAMES  # noqa: E402
 
 __all__ = [
     "plot_sweep", "plot_bifurcation", "plot_period_map", "plot_census", "overlay_branches", "main",
@@ -322,7 +322,7 @@ def plot_census(
     Parameters
     ----------
     result : CensusResult
-        What :func:`stickslip_fast.census.load_census` returns.
+        What :func:`stickslip_fast.analysis.census.load_census` returns.
     variables : sequence of str, optional
         State names to draw (default x_i and phi_i); names of one kind share a panel.
     title : str, optional
@@ -461,7 +461,7 @@ def plot_sweep(
     """
     import h5py
 
-    from stickslip_fast.continuation import Branch
+    from stickslip_fast.bifurcation.continuation import Branch
 
     loaded = [Branch.from_hdf5(b) for b in branches]
 
@@ -469,7 +469,7 @@ def plot_sweep(
         kind = h5.attrs.get("kind")
         file_title = str(h5.attrs.get("title", ""))
     if kind == "census":
-        from stickslip_fast.census import load_census
+        from stickslip_fast.analysis.census import load_census
 
         res = load_census(path)
         fig = plot_census(res, variables, title=title if title is not None else file_title or None)
@@ -526,7 +526,7 @@ def overlay_branches(
         From :func:`plot_bifurcation` or :func:`plot_census`: its first axes are
         the variable panels (one per kind of variable, in the order of ``variables``).
     branches : sequence of Branch
-        :class:`stickslip_fast.continuation.Branch`, e.g. from ``Branch.from_hdf5``.
+        :class:`stickslip_fast.bifurcation.continuation.Branch`, e.g. from ``Branch.from_hdf5``.
     param : str
         The figure's parameter; every branch must be continued in it.
     state_names : sequence of str

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import stickslip_fast as ssf
-from stickslip_fast.config import load_config
+from stickslip_fast.cli.config import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = 50

@@ -14,14 +14,16 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
-from . import cache_guard as _cache_guard
+from .base import cache_guard as _cache_guard
 
 _cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
-from .census import CensusResult, census, load_census
-from .continuation import (
+from .analysis.census import CensusResult, census, load_census
+from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
+from .analysis.sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
+from .bifurcation.continuation import (
     Bifurcation,
     Branch,
     continue_equilibrium,
@@ -29,12 +31,10 @@ from .continuation import (
     join_branches,
     switch_branch,
 )
-from .orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
-from .poincare import STATUS_NAMES
-from .simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
-from .sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
-from .system import PRESETS, SWEEPABLE, System
-from .trajectory import METHODS
+from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
+from .core.poincare import STATUS_NAMES
+from .core.trajectory import METHODS
+from .model.system import PRESETS, SWEEPABLE, System
 
 try:
     __version__ = version("stickslip_fast")

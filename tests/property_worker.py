@@ -68,7 +68,7 @@ def cli(argv: list[str], sweep_out: str | None = None) -> dict:
         return {**_raised(exc), "stderr": err.getvalue()}
     report = {"kind": "exit", "rc": rc, "stdout": out.getvalue(), "stderr": err.getvalue()}
     if rc == 0 and sweep_out is not None:
-        from stickslip_fast.sweep import load_sweep
+        from stickslip_fast.analysis.sweep import load_sweep
 
         r = load_sweep(sweep_out)
         ok = r.status == "ok"
@@ -101,7 +101,7 @@ def ping() -> bool:
     import warnings
 
     import stickslip_fast as ssf
-    from stickslip_fast.sweep import sweep
+    from stickslip_fast.analysis.sweep import sweep
 
     warnings.simplefilter("ignore")
     for drive in ("constant", "dc-motor"):

@@ -18,8 +18,8 @@ from numba import njit
 from numba.core.errors import TypingError
 from numba.extending import overload
 
-from stickslip_fast.driver import PoincareObserver, Section
-from stickslip_fast.jit import OVERLOAD, borrow
+from stickslip_fast.base.jit import OVERLOAD, borrow
+from stickslip_fast.core.driver import PoincareObserver, Section
 
 Rec = namedtuple("Rec", ["a", "k", "flag", "m", "inner"])
 Inner = namedtuple("Inner", ["x", "up"])
@@ -99,7 +99,7 @@ def test_borrow_refuses_values_it_cannot_borrow():
 
 
 def test_poll_flag_reads_the_first_entry_of_an_integer_flag():
-    from stickslip_fast.jit import poll_flag
+    from stickslip_fast.base.jit import poll_flag
 
     @njit
     def read(flag):

@@ -15,7 +15,7 @@ import stickslip_fast
 
 SNIPPET = """
 import numpy as np
-from stickslip_fast.model import jacobian_vector
+from stickslip_fast.model.equations import jacobian_vector
 from stickslip_fast import System
 s = System.preset("asymmetric")
 blocks, col, row, out = np.empty((1, 4, 4)), np.zeros((1, 4)), np.zeros((1, 4)), np.empty(4)
@@ -44,7 +44,7 @@ def test_edit_in_another_module_reaches_cached_kernel(tmp_path):
     again, hits = _run(tmp_path, guard=True)
     assert again == first and hits == 1  # unchanged sources: the cache is used
 
-    src = pkg / "linalg.py"
+    src = pkg / "model" / "linalg.py"
     text = src.read_text()
     edited = text.replace(
         "                b[r, 0] * u[j] + b[r, 1] * u[j + 1] + b[r, 2] * u[j + 2] + b[r, 3] * u[j + 3]\n",

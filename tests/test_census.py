@@ -19,15 +19,15 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.census import (
+from stickslip_fast.analysis.census import (
     census,
     classify_census,
     default_box,
     load_census,
     sample_starts,
 )
+from stickslip_fast.core.poincare import STATUS_NAMES
 from stickslip_fast.io import ConfigMismatchError
-from stickslip_fast.poincare import STATUS_NAMES
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ASYM = ssf.System.preset("asymmetric")
@@ -375,7 +375,7 @@ def test_transitions_of_the_zero_start_are_classified():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import census_transitions
 
-    from stickslip_fast.census import CensusResult
+    from stickslip_fast.analysis.census import CensusResult
 
     n_v, n_s = 6, 3
     vals = np.arange(float(n_v))

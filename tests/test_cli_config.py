@@ -12,7 +12,7 @@ import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.cli import main
-from stickslip_fast.config import ConfigError, load_config, paper_order_to_state
+from stickslip_fast.cli.config import ConfigError, load_config, paper_order_to_state
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.continuation import (
+from stickslip_fast.bifurcation.continuation import (
     NOISE_FLOOR,
     Branch,
     _correct,
@@ -242,8 +242,8 @@ def test_branch_reaches_the_issue_value_at_eta_3_30(branch):
 
 
 def test_cli_continue_writes_the_api_branch_and_info_reads_it(branch, tmp_path, capsys):
+    from stickslip_fast.bifurcation.continuation import Branch
     from stickslip_fast.cli import main
-    from stickslip_fast.continuation import Branch
 
     _, br = branch
     cfg = tmp_path / "c.toml"

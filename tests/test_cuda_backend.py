@@ -42,9 +42,9 @@ else:
     pytest.importorskip("numba_cuda", reason="numba-cuda (the [cuda] extra) is not installed")
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast import cuda_backend  # noqa: E402
+from stickslip_fast.analysis.sweep import sweep  # noqa: E402
+from stickslip_fast.backends import cuda as cuda_backend  # noqa: E402
 from stickslip_fast.io import ConfigMismatchError  # noqa: E402
-from stickslip_fast.sweep import sweep  # noqa: E402
 
 if REAL_GPU:  # pragma: no cover - only on a machine with a GPU
     cuda_backend.check_available()
@@ -232,9 +232,10 @@ def test_nothing_else_imports_cuda():
     code = textwrap.dedent(
         """
         import sys
-        import stickslip_fast, stickslip_fast.sweep, stickslip_fast.census, stickslip_fast.cli
-        import stickslip_fast.orbits, stickslip_fast.continuation, stickslip_fast.backends
-        cuda = ("numba.cuda", "numba_cuda", "stickslip_fast.cuda")
+        import stickslip_fast, stickslip_fast.analysis.sweep, stickslip_fast.analysis.census
+        import stickslip_fast.cli.commands, stickslip_fast.bifurcation.orbits
+        import stickslip_fast.bifurcation.continuation, stickslip_fast.backends.dask
+        cuda = ("numba.cuda", "numba_cuda", "stickslip_fast.backends.cuda")
         print(sorted(m for m in sys.modules if m.startswith(cuda)))
         """
     )
@@ -293,7 +294,7 @@ def test_kernels_compile_for_the_real_cuda_target():
         pytest.skip(f"no NVVM/NVRTC here (install the [cuda] extra): {type(exc).__name__}")
     code = textwrap.dedent(
         """
-        from stickslip_fast import cuda_backend as cb
+        from stickslip_fast.backends import cuda as cb
         try:
             ptx = cb.compile_ptx(2, True, (8, 0))
         except Exception as exc:  # no NVVM / NVRTC in this environment

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
+from stickslip_fast.analysis.sweep import sweep
 from stickslip_fast.io import SweepFile
-from stickslip_fast.sweep import sweep
 
 HAVE_DASK = importlib.util.find_spec("distributed") is not None
 needs_dask = pytest.mark.skipif(not HAVE_DASK, reason="dask[distributed] is not installed")
@@ -52,7 +52,7 @@ def cluster():
     """Two single-threaded worker processes (one Numba thread each) for the whole module."""
     from distributed import Client
 
-    from stickslip_fast.backends import local_cluster
+    from stickslip_fast.backends.dask import local_cluster
 
     # compile (or load) the kernels here first, so the workers load Numba's cache
     sweep(ASYM, "eta", [9.0], **KW)
@@ -129,7 +129,7 @@ def test_dask_resumes_a_partial_local_sweep(cluster, tmp_path, monkeypatch, mode
 @needs_dask
 def test_tasks_do_not_compile_and_use_one_numba_thread(cluster):
     address, client = cluster
-    from stickslip_fast import backends
+    from stickslip_fast.backends import dask as backends
 
     info = backends.prepare_client(client)  # already registered: returns what each warm-up did
     pids = client.run(os.getpid)
@@ -141,7 +141,7 @@ def test_tasks_do_not_compile_and_use_one_numba_thread(cluster):
           mode="continuation-both", **KW)  # fmt: skip
 
     def overloads():
-        from stickslip_fast.trajectory import continuation_chunk, sweep_chunk
+        from stickslip_fast.core.trajectory import continuation_chunk, sweep_chunk
 
         return {
             "sweep_chunk": len(sweep_chunk.overloads),

@@ -21,7 +21,7 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 import stickslip_fast as ssf
-from stickslip_fast.continuation import _equilibrium_tests, pseudo_arclength
+from stickslip_fast.bifurcation.continuation import _equilibrium_tests, pseudo_arclength
 
 sys.path.insert(0, str(Path(__file__).parent / "reference"))
 import scipy_model  # noqa: E402
@@ -137,8 +137,8 @@ def test_bad_input_names_the_argument(branch):
 
 
 def test_cli_continues_an_equilibrium(branch, tmp_path, capsys):
+    from stickslip_fast.bifurcation.continuation import Branch
     from stickslip_fast.cli import main
-    from stickslip_fast.continuation import Branch
 
     _, br = branch
     cfg = tmp_path / "e.toml"
@@ -160,8 +160,8 @@ def test_cli_continues_an_equilibrium(branch, tmp_path, capsys):
 
 
 def test_both_directions_join_into_one_branch_through_the_start(tmp_path):
+    from stickslip_fast.bifurcation.continuation import Branch, join_branches
     from stickslip_fast.cli import main
-    from stickslip_fast.continuation import Branch, join_branches
 
     e = ssf.find_equilibrium(SYSTEM, "sliding")
     kw = dict(ds=0.001, ds_max=0.005, max_points=400)

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast import settings as settings_mod
-from stickslip_fast.config import ConfigError, parse_config
-from stickslip_fast.system import System
+from stickslip_fast.cli.config import ConfigError, parse_config
+from stickslip_fast.core import settings as settings_mod
+from stickslip_fast.model.system import System
 
 QUICK = dict(t_end=20.0, max_points=2, progress=False)
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.status import FAILURE_STATUSES
+from stickslip_fast.base.status import FAILURE_STATUSES
 
 ASYM = ssf.System.preset("asymmetric", eta=2.0)
 KW = dict(t_end=300.0, t_transient=200.0, progress=False)

@@ -5,7 +5,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from stickslip_fast import System
-from stickslip_fast.model import dense_jacobian, eta_prime, friction, rhs
+from stickslip_fast.model.equations import dense_jacobian, eta_prime, friction, rhs
 
 
 def _peak_of_T(eta: float, eps: float = 1e-5) -> float:

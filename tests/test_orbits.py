@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.orbits import return_map
-from stickslip_fast.params import P_ETA
+from stickslip_fast.bifurcation.orbits import return_map
+from stickslip_fast.model.params import P_ETA
 
 REF = Path(__file__).resolve().parent / "reference"
 sys.path.insert(0, str(REF))
@@ -109,7 +109,7 @@ def test_parameter_column_matches_finite_differences_of_the_return_map(orbits, e
 
 
 def test_parameter_sensitivity_is_one_sided_at_the_valid_range_edge():
-    from stickslip_fast.orbits import _sensitivity_params
+    from stickslip_fast.bifurcation.orbits import _sensitivity_params
 
     s = ssf.System.preset("asymmetric", eta=10.0)
     rows, inv = _sensitivity_params(s, "eta", 1e-7)

@@ -12,7 +12,7 @@ import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis import largest_lyapunov, sync_error
-from stickslip_fast.config import load_config
+from stickslip_fast.cli.config import load_config
 from stickslip_fast.io import ConfigMismatchError, read_trajectory, write_trajectory
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -190,7 +190,7 @@ def test_make_figures_quick_makes_one_file_per_figure(tmp_path):
 
 
 def _fake_branch(system, period, values, stable, bifurcations=()):
-    from stickslip_fast.continuation import Bifurcation, Branch
+    from stickslip_fast.bifurcation.continuation import Bifurcation, Branch
 
     n = system.n_state
     pts = np.zeros((values.size, n))
@@ -206,7 +206,7 @@ def _fake_branch(system, period, values, stable, bifurcations=()):
 
 
 def test_branches_overlay_sweeps_and_censuses(tmp_path):
-    from stickslip_fast.continuation import Branch
+    from stickslip_fast.bifurcation.continuation import Branch
 
     sweep_file = tmp_path / "one.h5"
     ssf.sweep(ASYM, "eta", np.linspace(1.0, 10.0, 6), out=sweep_file, **KW)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.poincare import detect_period
+from stickslip_fast.core.poincare import detect_period
 
 
 def test_symmetric_system_keeps_phi_identically_zero():

@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
+from stickslip_fast.analysis.sweep import load_sweep, sweep
 from stickslip_fast.cli import main
-from stickslip_fast.config import ConfigError, load_config
+from stickslip_fast.cli.config import ConfigError, load_config
 from stickslip_fast.io import ConfigMismatchError, ResultFileError, SweepFile
-from stickslip_fast.sweep import load_sweep, sweep
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ASYM = ssf.System.preset("asymmetric")
@@ -89,7 +89,7 @@ def test_corrupted_object_header_fails_fast_instead_of_hanging(ref_file, tmp_pat
     with h5py.File(path, "r") as h5:
         addr = h5py.h5o.get_info(h5["points"].id).addr
     _overwrite(path, addr + 40, b"\xa5" * 16)
-    script = f"from stickslip_fast.sweep import load_sweep; load_sweep({str(path)!r})"
+    script = f"from stickslip_fast.analysis.sweep import load_sweep; load_sweep({str(path)!r})"
     proc = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
         env={**os.environ, "PYTHONPATH": ROOT},
@@ -322,7 +322,7 @@ def test_writer_lock_covers_symlinks(ref_file, tmp_path):
 
 # ------------------------------------------------------- item 9: OS errors
 def test_os_errors_are_one_line_with_exit_2(tmp_path, capsys, monkeypatch):
-    sim = sys.modules["stickslip_fast.simulate"]
+    sim = sys.modules["stickslip_fast.analysis.simulate"]
     afile = tmp_path / "plain.txt"
     afile.write_text("x")
 

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.problems import SMALL_N_MAX
-from stickslip_fast.status import ST_ERROR, ST_OK
-from stickslip_fast.trajectory import (
+from stickslip_fast.base.status import ST_ERROR, ST_OK
+from stickslip_fast.core.problems import SMALL_N_MAX
+from stickslip_fast.core.trajectory import (
     I_CROSSINGS,
     I_REJECTED,
     I_STEPS,

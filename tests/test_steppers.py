@@ -10,9 +10,14 @@ import pytest
 from scipy.linalg import expm
 
 from stickslip_fast import System
-from stickslip_fast.status import STATUS_NAMES
-from stickslip_fast.testproblems import Kaps, LinearProblem, ProtheroRobinson, solve_test_problem
-from stickslip_fast.variational import propagate_sensitivity, propagate_tangents
+from stickslip_fast.base.status import STATUS_NAMES
+from stickslip_fast.core.testproblems import (
+    Kaps,
+    LinearProblem,
+    ProtheroRobinson,
+    solve_test_problem,
+)
+from stickslip_fast.core.variational import propagate_sensitivity, propagate_tangents
 
 A_OSC = np.array([[0.0, 1.0], [-1.0, -0.1]])
 
@@ -97,7 +102,7 @@ def test_kernel_rules_nan_and_bounded_rejections():
 @pytest.mark.parametrize("variant", [(), (0,)], ids=["generic", "small"])
 def test_state_transition_matrix_of_linear_model_is_expm(variant):
     # mu = 0 removes friction from a constant-belt disk: y' = J y, so Phi(t) = expm(J t)
-    from stickslip_fast.model import dense_jacobian
+    from stickslip_fast.model.equations import dense_jacobian
 
     s = System(mu=0.0, k12=-0.8, c=0.05, c12=0.01, m=2.0)
     p = s.to_array()
@@ -127,7 +132,7 @@ def test_state_transition_matrix_of_linear_model_is_expm(variant):
 def test_parameter_sensitivity_of_linear_model_is_the_expm_derivative(variant):
     # mu = 0: y' = J(k12) y with J affine in k12, so d/dk12 expm(J t) y0 is exactly the
     # upper-right block of expm([[J, B], [0, J]] t) y0 with B = dJ/dk12 (Van Loan)
-    from stickslip_fast.model import dense_jacobian
+    from stickslip_fast.model.equations import dense_jacobian
 
     k12, h = -0.8, 1e-6
     s = System(mu=0.0, k12=k12, c=0.05, c12=0.01, m=2.0)
@@ -175,7 +180,7 @@ def test_small_tangent_kernel_is_bit_identical_to_generic(drive):
     # StickSlipTangentSmall: the generic tangent arithmetic with N and the belt known
     # at compile time; one return to the section with the n - 1 tangents of the
     # monodromy, through the stick-slip layer at eta = 2
-    from stickslip_fast.problems import small_shape
+    from stickslip_fast.core.problems import small_shape
 
     s = System.preset("asymmetric", eta=2.0, drive=drive)
     n = s.n_state
@@ -207,7 +212,7 @@ def test_small_tangent_kernel_is_bit_identical_to_generic(drive):
 
 
 def test_tangent_kernel_rejects_a_mismatched_variant():
-    from stickslip_fast.problems import small_shape
+    from stickslip_fast.core.problems import small_shape
 
     s = System.preset("asymmetric", eta=2.0)
     n = s.n_state

@@ -14,8 +14,8 @@ import pytest
 from scipy.integrate import solve_ivp  # noqa: F401  (reference helpers below)
 
 import stickslip_fast as ssf
+from stickslip_fast.analysis.sweep import load_sweep, sweep
 from stickslip_fast.io import ConfigMismatchError
-from stickslip_fast.sweep import load_sweep, sweep
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "reference"))
 import scipy_model  # noqa: E402
@@ -124,7 +124,7 @@ def test_killed_sweep_resumes_to_the_same_file(tmp_path):
         import sys, numpy as np
         sys.path.insert(0, {ROOT!r})
         import stickslip_fast as ssf
-        from stickslip_fast.sweep import sweep
+        from stickslip_fast.analysis.sweep import sweep
         sweep(ssf.System.preset("asymmetric"), "eta", np.linspace(5.0, 10.0, 48),
               out={str(part)!r}, chunk_size=2, threads=1, progress=False, **{kw!r})
         """

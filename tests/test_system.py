@@ -90,7 +90,7 @@ def test_invalid_settings_are_named(kwargs, name):
 def test_to_array_roundtrip_and_replace():
     s = System.preset("asymmetric", eta=4.0)
     p = s.to_array()
-    from stickslip_fast.system import PARAM_INDEX
+    from stickslip_fast.model.system import PARAM_INDEX
 
     for name, idx in PARAM_INDEX.items():
         assert p[idx] == getattr(s, name)

@@ -1,4 +1,4 @@
-"""Numerical checks of the coefficient tables in ``stickslip_fast.tableaus``.
+"""Numerical checks of the coefficient tables in ``stickslip_fast.core.tableaus``.
 
 Each scheme is exercised through a tiny pure-NumPy reference stepper written
 here, directly from the formulas in the module docstring, so these tests also
@@ -17,7 +17,7 @@ import pytest
 # Namespace-package import from the repository root (no __init__.py needed).
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from stickslip_fast.tableaus import (  # noqa: E402
+from stickslip_fast.core.tableaus import (  # noqa: E402
     DOPRI5,
     RODAS4P,
     RODAS4P2,

@@ -11,7 +11,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..poincare import STATUS_NAMES
+from ..core.poincare import STATUS_NAMES
 from .layout import _DESCRIPTIONS, PER_VALUE_FIELDS, SCHEMA_VERSION
 from .sweepfile import SweepFile
 

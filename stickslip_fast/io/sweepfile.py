@@ -13,7 +13,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..poincare import STATUS_NAMES
+from ..core.poincare import STATUS_NAMES
 from .base import (
     ConfigMismatchError,
     ResultFileError,

@@ -165,9 +165,9 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
     ValueError
         If the file is not a trajectory file of this schema.
     """
-    from ..settings import Settings
-    from ..simulate import SimulationResult
-    from ..system import System
+    from ..analysis.simulate import SimulationResult
+    from ..core.settings import Settings
+    from ..model.system import System
 
     with open_h5(path) as h5:
         if h5.attrs.get("schema_version") != SCHEMA_VERSION or h5.attrs.get("kind") != "trajectory":

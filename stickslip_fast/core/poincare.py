@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .jit import JIT as _JIT
-from .status import (  # noqa: F401  (re-exported: the codes used to live here)
+from ..base.jit import JIT as _JIT
+from ..base.status import (  # noqa: F401  (re-exported: the codes used to live here)
     ORBIT_STATUSES,
     ST_EQUILIBRIUM,
     ST_MAX_STEPS,

@@ -51,12 +51,14 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
 
 from numba import cuda, float64, int64, types
 
-from . import linalg, model, poincare
-from .params import P_VB0
-from .status import STATUS_NAMES
-from .steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
-from .tableaus import RODAS5P
-from .trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
+from ..base.status import STATUS_NAMES
+from ..core import poincare
+from ..core.steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
+from ..core.tableaus import RODAS5P
+from ..core.trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
+from ..model import equations as model
+from ..model import linalg
+from ..model.params import P_VB0
 
 # numba-cuda <= 0.30.4 registers an overload for np.row_stack when it compiles
 # its first kernel, and NumPy 2.5 removed that alias: the compile then fails with

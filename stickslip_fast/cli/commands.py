@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from ..core.trajectory import METHODS
+from ..model.system import DRIVES, PRESETS
 from .config import ConfigError, RunConfig, load_config, parse_config
-from .system import DRIVES, PRESETS
-from .trajectory import METHODS
 
 __all__ = ["main"]
 
@@ -84,7 +84,7 @@ def _add_common(p: argparse.ArgumentParser) -> None:
 def _check_writable(path: str, what: str) -> None:
     """Fail now, with one line naming the path, if ``path`` cannot be written later."""
 
-    from .io import _make_parent
+    from ..io import _make_parent
 
     p = Path(path)
     if p.is_dir():
@@ -99,7 +99,7 @@ def _check_writable(path: str, what: str) -> None:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .simulate import simulate
+    from ..analysis.simulate import simulate
 
     cfg = _config_from_args(args)
     # check the outputs before computing: a bad path should not cost a whole run
@@ -109,7 +109,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         _check_writable(args.save, "--save")
     res = simulate(cfg.system, y0=cfg.y0, sample_dt=cfg.sample_dt, **cfg.integration)
     if args.output:
-        from .io import write_trajectory
+        from ..io import write_trajectory
 
         write_trajectory(args.output, res, cfg)
         print(f"wrote {args.output}", file=sys.stderr)
@@ -159,7 +159,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import sweep
+    from ..analysis.sweep import sweep
 
     cfg = _config_from_args(args)
     if cfg.sweep is None:
@@ -186,7 +186,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_census(args: argparse.Namespace) -> int:
-    from .census import census
+    from ..analysis.census import census
 
     cfg = _config_from_args(args)
     if cfg.census is None:
@@ -217,7 +217,12 @@ def _cmd_census(args: argparse.Namespace) -> int:
 
 
 def _cmd_continue(args: argparse.Namespace) -> int:
-    from .continuation import continue_equilibrium, continue_orbit, join_branches, switch_branch
+    from ..bifurcation.continuation import (
+        continue_equilibrium,
+        continue_orbit,
+        join_branches,
+        switch_branch,
+    )
 
     cfg = _config_from_args(args)
     if cfg.continuation is None:
@@ -276,8 +281,8 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
 
 def _orbit_from_config(cfg: RunConfig, param: str, period, say):
     """The orbit of the config's system: a simulation from [initial], then Newton."""
-    from .orbits import find_orbit
-    from .simulate import simulate
+    from ..analysis.simulate import simulate
+    from ..bifurcation.orbits import find_orbit
 
     value = getattr(cfg.system, param)
     say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
@@ -302,7 +307,7 @@ def _orbit_from_config(cfg: RunConfig, param: str, period, say):
 
 def _equilibrium_from_config(cfg: RunConfig, param: str, start: str, say):
     """The config's system's rest point (``start`` "sliding" or "stall")."""
-    from .orbits import find_equilibrium
+    from ..bifurcation.orbits import find_equilibrium
 
     eq = find_equilibrium(cfg.system, start)
     if not eq.converged:
@@ -319,8 +324,8 @@ def _census_report(path) -> str:
     """A text summary of a census file: configuration, progress, attractors per value."""
     import h5py
 
-    from .census import load_census
-    from .poincare import STATUS_NAMES
+    from ..analysis.census import load_census
+    from ..core.poincare import STATUS_NAMES
 
     with h5py.File(path, "r", libver="latest", swmr=True) as h5:
         attrs = dict(h5.attrs)
@@ -375,7 +380,7 @@ def _report(path, verify: bool = False) -> str:
     checked against their SHA-256; a damaged file raises
     :class:`~stickslip_fast.io.ResultFileError` after the summary is printed.
     """
-    from .io import file_kind, open_h5, sweep_summary, verify_sweep, writer_alive
+    from ..io import file_kind, open_h5, sweep_summary, verify_sweep, writer_alive
 
     if file_kind(path) == "trajectory":
         with open_h5(path) as h5:
@@ -388,7 +393,7 @@ def _report(path, verify: bool = False) -> str:
     problems, bad = verify_sweep(path)
     if problems:
         print(text)
-        from .io import ResultFileError
+        from ..io import ResultFileError
 
         raise ResultFileError(
             f"{path} is corrupted: {'; '.join(problems)} ({int(bad.sum())} of {bad.size} "
@@ -399,7 +404,7 @@ def _report(path, verify: bool = False) -> str:
 
 
 def _sweep_report(path, info: dict) -> tuple[str, bool]:
-    from .poincare import STATUS_NAMES
+    from ..core.poincare import STATUS_NAMES
 
     cfg, attrs = info["config"], info["attrs"]
     done, status, period = info["done"], info["status"], info["period"]
@@ -475,10 +480,10 @@ def _trajectory_report(path, h5) -> str:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from .io import file_kind
+    from ..io import file_kind
 
     if file_kind(args.file) == "branch":
-        from .continuation import Branch
+        from ..bifurcation.continuation import Branch
 
         b = Branch.from_hdf5(args.file)
         print(f"file:      {args.file}  (branch)")
@@ -495,7 +500,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
         return 0
     print(_report(args.file, verify=True))
     if args.json:
-        from .io import file_kind, open_h5, sweep_summary
+        from ..io import file_kind, open_h5, sweep_summary
 
         if file_kind(args.file) == "trajectory":
             with open_h5(args.file) as h5:

@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from .model import dense_jacobian
+from ..model.equations import dense_jacobian
+from ..model.system import SWEEPABLE
 from .orbits import (
     EQUILIBRIUM_SPEED,
     SECTION_INDEX,
@@ -34,7 +35,6 @@ from .orbits import (
     return_map,
     stick_phases,
 )
-from .system import SWEEPABLE
 
 __all__ = [
     "Branch",
@@ -221,7 +221,7 @@ class Branch:
         """
         import h5py
 
-        from .system import System
+        from ..model.system import System
 
         with h5py.File(path, "r") as h5:
             kind = h5.attrs.get("kind")

@@ -47,14 +47,14 @@ from typing import Any
 
 import numpy as np
 
-from .interrupt import call_interruptible, new_abort_flag
-from .model import dense_jacobian, friction, rhs
-from .params import eta_prime
-from .poincare import STATUS_NAMES
-from .simulate import SimulationResult, simulate
-from .system import SWEEPABLE, System
-from .trajectory import kernel_variant
-from .variational import propagate_sensitivity, propagate_tangents
+from ..analysis.simulate import SimulationResult, simulate
+from ..base.interrupt import call_interruptible, new_abort_flag
+from ..core.poincare import STATUS_NAMES
+from ..core.trajectory import kernel_variant
+from ..core.variational import propagate_sensitivity, propagate_tangents
+from ..model.equations import dense_jacobian, friction, rhs
+from ..model.params import eta_prime
+from ..model.system import SWEEPABLE, System
 
 __all__ = [
     "Orbit",
@@ -358,7 +358,7 @@ def _minimal_period(points: np.ndarray, tol: float) -> int:
 # ------------------------------------------------------------------ orbits
 def _start_from(system: System, start: Any, period: int | None, t_max: float):
     """(z on the section, period) from a state, a SimulationResult or a census Attractor."""
-    from .census import Attractor
+    from ..analysis.census import Attractor
 
     n = system.n_state
     if isinstance(start, Attractor):

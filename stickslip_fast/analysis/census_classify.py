@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .poincare import STATUS_NAMES
-from .settings import STOP_KINDS
+from ..core.poincare import STATUS_NAMES
+from ..core.settings import STOP_KINDS
+from ..model.system import System
 from .simulate import MAX_PERIOD
-from .system import System
 
 __all__ = ["Attractor", "Track", "CensusResult", "classify_census", "KINDS"]
 

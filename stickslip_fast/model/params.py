@@ -12,7 +12,7 @@ import math
 
 from numba import njit
 
-from .jit import JIT
+from ..base.jit import JIT
 
 __all__ = ["ETA_MIN", "ETA_MAX", "N_PARAMS", "PARAM_INDEX", "eta_prime"]
 

@@ -26,9 +26,9 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
+from ..base.jit import JIT, OVERLOAD
+from ..model.linalg import dense_w_factor, dense_w_solve
 from .driver import STOP_AT_END, Controls, PoincareObserver, Section, drive, simple_stop
-from .jit import JIT, OVERLOAD
-from .linalg import dense_w_factor, dense_w_solve
 from .problems import (
     error_norm,
     initial_step,

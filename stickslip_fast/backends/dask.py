@@ -39,11 +39,11 @@ from typing import Any
 
 import numpy as np
 
-from .cache_guard import fingerprint
-from .chunks import compute_continuation_chunk, compute_restart_chunk
-from .settings import Settings
-from .system import System
-from .trajectory import continuation_chunk, sweep_chunk
+from ..base.cache_guard import fingerprint
+from ..core.settings import Settings
+from ..core.trajectory import continuation_chunk, sweep_chunk
+from ..model.system import System
+from .local import compute_continuation_chunk, compute_restart_chunk
 
 try:  # the plugin base class; a stand-in keeps this module importable without Dask
     from distributed import WorkerPlugin as _WorkerPluginBase

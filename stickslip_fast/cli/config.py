@@ -68,8 +68,8 @@ from typing import Any
 
 import numpy as np
 
-from .settings import Settings
-from .system import SWEEPABLE, System
+from ..core.settings import Settings
+from ..model.system import SWEEPABLE, System
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -168,7 +168,7 @@ def _values_from_spec(spec: Any, key: str) -> np.ndarray:
 
 
 def _analyses(value: Any) -> tuple[str, ...]:
-    from .io import ANALYSES
+    from ..io import ANALYSES
 
     if not isinstance(value, list) or not all(isinstance(a, str) for a in value):
         raise ConfigError(f"[sweep].analyses must be a list of names, got {value!r}")

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import PER_VALUE_FIELDS, read_dataset, read_sweep
-from .poincare import ORBIT_STATUSES, STATUS_NAMES
-from .settings import Settings
-from .system import System
+from ..core.poincare import ORBIT_STATUSES, STATUS_NAMES
+from ..core.settings import Settings
+from ..io import PER_VALUE_FIELDS, read_dataset, read_sweep
+from ..model.system import System
 
 __all__ = ["SweepResult", "load_sweep", "warn_no_orbit"]
 

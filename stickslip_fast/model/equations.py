@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .jit import JIT
+from ..base.jit import JIT
 from .linalg import bordered_matvec
 from .params import (
     P_BETA,

@@ -23,7 +23,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from .chunks import (
+from ..backends.local import (
     WorkUnit,
     compute_continuation_chunk,
     compute_restart_chunk,
@@ -33,11 +33,11 @@ from .chunks import (
     unit_starts,
     write_unit,
 )
-from .io import ANALYSES, PER_VALUE_FIELDS, MemoryStore, SweepFile, SweepLayout
-from .settings import DEFAULT_EQUILIBRIUM_TOL, Settings, check_memory
+from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings, check_memory
+from ..io import ANALYSES, PER_VALUE_FIELDS, MemoryStore, SweepFile, SweepLayout
+from ..model.system import SWEEPABLE, System
 from .simulate import WORKSPACE_VECTORS
 from .sweep_result import SweepResult, load_sweep, warn_no_orbit
-from .system import SWEEPABLE, System
 
 __all__ = [
     "sweep",
@@ -260,7 +260,7 @@ def _numba_threads(threads: int | None):
 def _open_store(plan: _Plan, out, title: str, notes: str) -> SweepFile | MemoryStore:
     if out is None:
         return MemoryStore(plan.layout)
-    from . import __version__
+    from .. import __version__
 
     return SweepFile.open(
         out, plan.config(), plan.layout, title=title, notes=notes, package_version=__version__
@@ -297,7 +297,7 @@ def _units(plan: _Plan, done: np.ndarray, chunk_size: int, store) -> Iterator[Wo
 
 def _run_analyses(unit: WorkUnit, res: dict, plan: _Plan) -> dict:
     """Add the requested analysis fields to a unit's results (values axes first)."""
-    from .analysis import largest_lyapunov, sync_error  # not needed by most sweeps
+    from . import largest_lyapunov, sync_error  # not needed by most sweeps
 
     system, names, s = plan.system, plan.names, plan.settings
     res = dict(res)
@@ -323,14 +323,14 @@ def _run_analyses(unit: WorkUnit, res: dict, plan: _Plan) -> dict:
 
 def _cuda_runner(system: System, settings: Settings, mode: str):
     """The CUDA runner (:func:`stickslip_fast.cuda_backend.cuda_runner`), imported on demand."""
-    from .cuda_backend import cuda_runner
+    from ..backends.cuda import cuda_runner
 
     return cuda_runner(system, settings, mode)
 
 
 def _dask_runner(scheduler: str | None, n_workers: int | None):
     """The Dask runner; imported on demand because importing distributed is slow."""
-    from .backends import dask_runner
+    from ..backends.dask import dask_runner
 
     return dask_runner(scheduler, n_workers)
 

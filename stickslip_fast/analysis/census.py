@@ -33,6 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
+from ..io import CensusFile, CensusLayout, read_census, write_census_classification
+from ..model.system import SWEEPABLE, System
 from .census_classify import (  # noqa: F401  (re-exported)
     _BACKENDS,
     _ST_EQ,
@@ -48,9 +51,6 @@ from .census_classify import (  # noqa: F401  (re-exported)
     Track,
     classify_census,
 )
-from .io import CensusFile, CensusLayout, read_census, write_census_classification
-from .settings import DEFAULT_EQUILIBRIUM_TOL, Settings
-from .system import SWEEPABLE, System
 
 
 # ------------------------------------------------------------------ the starts
@@ -280,8 +280,8 @@ def census(
     ValueError
         For bad input, naming the argument.
     """
-    from . import __version__
-    from .chunks import run_local
+    from .. import __version__
+    from ..backends.local import run_local
     from .sweep import _numba_threads
 
     if not isinstance(system, System):
@@ -336,11 +336,11 @@ def census(
     n_v, n_s = len(vals), len(start_arr)
     runner = run_local
     if backend == "dask":
-        from .backends import dask_runner
+        from ..backends.dask import dask_runner
 
         runner = dask_runner(scheduler, n_workers)
     elif backend == "cuda":
-        from .cuda_backend import cuda_runner
+        from ..backends.cuda import cuda_runner
 
         runner = cuda_runner(system, settings, "census")
 

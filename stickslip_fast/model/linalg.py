@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .jit import JIT as _JIT
+from ..base.jit import JIT as _JIT
 
 
 @njit(inline="always", **_JIT)

@@ -28,7 +28,10 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
-from .driver import (
+from ..base.interrupt import call_interruptible, new_abort_flag
+from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.status import ST_ERROR, STATUS_NAMES
+from ..core.driver import (
     OBS_FAIL,
     OBS_MODIFIED,
     STOP_AT_END,
@@ -40,14 +43,11 @@ from .driver import (
     simple_stop,
     stop_now,
 )
-from .interrupt import call_interruptible, new_abort_flag
-from .jit import JIT, OVERLOAD, is_record
-from .params import N_PARAMS
-from .problems import alloc_bordered_linear, make_tangent, tangent_variant
-from .status import ST_ERROR, STATUS_NAMES
-from .steppers import RODAS5P_METHOD, alloc_workspace
-from .system import System
-from .trajectory import kernel_variant, variant_matches
+from ..core.problems import alloc_bordered_linear, make_tangent, tangent_variant
+from ..core.steppers import RODAS5P_METHOD, alloc_workspace
+from ..core.trajectory import kernel_variant, variant_matches
+from ..model.params import N_PARAMS
+from ..model.system import System
 
 __all__ = ["LyapunovResult", "LyapunovObserver", "largest_lyapunov", "lyapunov_kernel"]
 

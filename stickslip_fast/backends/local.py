@@ -18,12 +18,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .interrupt import call_interruptible, new_abort_flag
-from .settings import STOP_KINDS, Settings
-from .simulate import MAX_PERIOD
-from .status import ST_NOT_COMPUTED
-from .system import PARAM_INDEX, System
-from .trajectory import (
+from ..analysis.simulate import MAX_PERIOD
+from ..base.interrupt import call_interruptible, new_abort_flag
+from ..base.status import ST_NOT_COMPUTED
+from ..core.settings import STOP_KINDS, Settings
+from ..core.trajectory import (
     METHODS,
     SWEEP_INT_FIELDS,
     continuation_chunk,
@@ -31,6 +30,7 @@ from .trajectory import (
     run_settings,
     sweep_chunk,
 )
+from ..model.system import PARAM_INDEX, System
 
 __all__ = [
     "WorkUnit",

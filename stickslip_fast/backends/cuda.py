@@ -32,6 +32,8 @@ from collections.abc import Iterator
 import numpy as np
 from numba import njit
 
+from ..model.params import P_ETA, P_ETAP, eta_prime
+
 # cuda_kernels raises the ImportError that names the [cuda] extra before numba.cuda is used
 from .cuda_kernels import (
     MAX_OSCILLATORS,
@@ -42,7 +44,6 @@ from .cuda_kernels import (
     kernel_signature,
     simulator_enabled,
 )
-from .params import P_ETA, P_ETAP, eta_prime
 
 __all__ = [
     "MAX_OSCILLATORS",
@@ -93,7 +94,7 @@ class _Launch:
 
     def __init__(self, system, rows, y0, settings, max_period, threads_per_block,
                  max_registers=None):  # fmt: skip
-        from .trajectory import SWEEP_INT_FIELDS
+        from ..core.trajectory import SWEEP_INT_FIELDS
 
         kernel = get_kernel(system.n_oscillators, system.is_dc_motor, max_registers)
         nv = rows.shape[0]
@@ -173,8 +174,8 @@ def compute_restart_chunk_cuda(
         integer fields (and t_converged with converged stopping). Status and
         period equal the CPU's; points agree to ~1e-9.
     """
-    from .chunks import _pack, _param_rows
-    from .simulate import MAX_PERIOD
+    from ..analysis.simulate import MAX_PERIOD
+    from .local import _pack, _param_rows
 
     check_available()
     _check_supported(system, settings)
@@ -237,8 +238,8 @@ def cuda_runner(
     RuntimeError
         Without a GPU (and without NUMBA_ENABLE_CUDASIM=1).
     """
-    from .chunks import _pack, _param_rows, run_local
-    from .simulate import MAX_PERIOD
+    from ..analysis.simulate import MAX_PERIOD
+    from .local import _pack, _param_rows, run_local
 
     check_available()
     why = unsupported_reason(system, settings)

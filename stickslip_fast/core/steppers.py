@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
-from .jit import JIT, OVERLOAD, is_record
+from ..base.jit import JIT, OVERLOAD, is_record
 from .problems import (
     error_norm,
     initial_step,

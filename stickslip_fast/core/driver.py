@@ -35,16 +35,16 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
-from .jit import JIT, OVERLOAD, borrow, is_record, poll_flag
-from .poincare import ring_period
-from .problems import problem_error_norm, problem_initial_step
-from .status import (
+from ..base.jit import JIT, OVERLOAD, borrow, is_record, poll_flag
+from ..base.status import (
     ST_INTERRUPTED,
     ST_MAX_STEPS,
     ST_NONFINITE,
     ST_OK,
     ST_UNDERFLOW,
 )
+from .poincare import ring_period
+from .problems import problem_error_norm, problem_initial_step
 from .steppers import (
     accepted_step_factor,
     dense_state,

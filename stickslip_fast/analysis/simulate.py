@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .interrupt import call_interruptible, new_abort_flag
-from .poincare import STATUS_NAMES, detect_period
-from .settings import (
+from ..base.interrupt import call_interruptible, new_abort_flag
+from ..core.poincare import STATUS_NAMES, detect_period
+from ..core.settings import (
     DEFAULT_ATOL,
     DEFAULT_EQUILIBRIUM_TOL,
     DEFAULT_MAX_STEPS,
@@ -20,8 +20,7 @@ from .settings import (
     check_real,
     period_tolerance,
 )
-from .system import System
-from .trajectory import (
+from ..core.trajectory import (
     F_AMPLITUDE,
     F_T_CONVERGED,
     F_T_FINAL,
@@ -37,6 +36,7 @@ from .trajectory import (
     run_settings,
     unroll_ring,
 )
+from ..model.system import System
 
 __all__ = [
     "simulate",

@@ -15,6 +15,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..base.jit import JIT
+from ..base.status import ST_ERROR
+from ..model.params import N_PARAMS
 from .driver import (
     STOP_AFTER_CROSSINGS,
     STOP_AT_END,
@@ -23,10 +26,7 @@ from .driver import (
     drive,
     simple_stop,
 )
-from .jit import JIT
-from .params import N_PARAMS
 from .problems import alloc_bordered_linear, make_sensitivity, make_tangent, tangent_variant
-from .status import ST_ERROR
 from .steppers import RODAS5P_METHOD, alloc_workspace
 from .trajectory import X1_MINIMA, variant_matches
 

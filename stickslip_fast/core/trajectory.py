@@ -29,6 +29,9 @@ import numpy as np
 from numba import njit, prange
 from numba.extending import overload
 
+from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.status import ST_ERROR, ST_NOT_COMPUTED, ST_OK
+from ..model.params import N_PARAMS, P_VB0
 from .driver import (
     S_T_CONVERGED,
     STOP_AT_END,
@@ -39,8 +42,6 @@ from .driver import (
     drive,
     simple_stop,
 )
-from .jit import JIT, OVERLOAD, is_record
-from .params import N_PARAMS, P_VB0
 from .poincare import classify, detect_period, motion_measure
 from .problems import (
     SMALL_N_MAX,
@@ -50,7 +51,6 @@ from .problems import (
     shape_dims,
     small_shape,
 )
-from .status import ST_ERROR, ST_NOT_COMPUTED, ST_OK
 from .steppers import (
     DOPRI5_METHOD,
     RODAS4P2_METHOD,

@@ -66,8 +66,14 @@ import numpy as np
 from numba import njit, types
 from numba.extending import overload
 
-from .jit import JIT, OVERLOAD, is_record
-from .linalg import (
+from ..base.jit import JIT, OVERLOAD, is_record
+from ..model.equations import (
+    jacobian_blocks,
+    rhs,
+    second_derivative_form_at,
+    second_partials_at,
+)
+from ..model.linalg import (
     blocks_factor,
     blocks_solve,
     bordered_matvec_inline,
@@ -76,13 +82,7 @@ from .linalg import (
     w_solve,
     w_solve_inline,
 )
-from .model import (
-    jacobian_blocks,
-    rhs,
-    second_derivative_form_at,
-    second_partials_at,
-)
-from .params import P_ETA, P_ETAP, eta_prime
+from ..model.params import P_ETA, P_ETAP, eta_prime
 
 __all__ = [
     "StickSlip",
