@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numba
 
-__all__ = ["fingerprint", "cache_dir", "check"]
+__all__ = ["fingerprint", "cache_dir", "cache_dirs", "check"]
 
-_PKG = Path(__file__).resolve().parent
+_PKG = Path(__file__).resolve().parents[1]  # the package root (this file is in base/)
 STAMP_NAME = "stickslip_fast.fingerprint"
 
 
@@ -45,14 +45,32 @@ def fingerprint() -> str:
     return digest.hexdigest()
 
 
-def cache_dir() -> Path:
-    """Where Numba keeps this package's cached kernels (as Numba itself locates it)."""
+def _cache_dir_of(folder: Path) -> Path:
+    """Where Numba keeps the cached kernels of the modules in ``folder`` (as Numba locates it)."""
+    import types
+
     from numba.core.caching import FunctionCache
 
-    def probe() -> None:  # a function of this package's directory, never compiled
+    def probe() -> None:  # never compiled: only its source file's folder matters
         pass
 
-    return Path(FunctionCache(probe)._cache_path)
+    code = probe.__code__.replace(co_filename=str(folder / "__init__.py"))
+    return Path(FunctionCache(types.FunctionType(code, {}, "probe"))._cache_path)
+
+
+def cache_dir() -> Path:
+    """Where Numba keeps the package root's cached kernels; the stamp lives there."""
+    return _cache_dir_of(_PKG)
+
+
+def cache_dirs() -> list[Path]:
+    """Where Numba keeps the cached kernels of the package and of each of its subpackages.
+
+    Numba caches a kernel beside its own module's folder, so a package in
+    layers (model/, core/, ...) has one cache folder per subpackage.
+    """
+    folders = [_PKG] + sorted(p.parent for p in _PKG.glob("*/__init__.py"))
+    return [_cache_dir_of(f) for f in folders]
 
 
 def check() -> bool:
@@ -72,8 +90,9 @@ def check() -> bool:
         pass
     try:
         where.mkdir(parents=True, exist_ok=True)
-        for path in list(where.glob("*.nbi")) + list(where.glob("*.nbc")):
-            path.unlink(missing_ok=True)
+        for folder in cache_dirs():
+            for path in list(folder.glob("*.nbi")) + list(folder.glob("*.nbc")):
+                path.unlink(missing_ok=True)
         tmp = where / f"{STAMP_NAME}.{os.getpid()}.tmp"
         tmp.write_text(current)
         os.replace(tmp, stamp)
