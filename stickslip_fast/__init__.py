@@ -12,8 +12,6 @@ Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
-
 from .base import cache_guard as _cache_guard
 
 _cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
@@ -23,6 +21,7 @@ from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_
 from .analysis.census import CensusResult, census, load_census
 from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .analysis.sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
+from .base.version import package_version
 from .bifurcation.continuation import (
     Bifurcation,
     Branch,
@@ -36,10 +35,7 @@ from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
 from .model.system import PRESETS, SWEEPABLE, System
 
-try:
-    __version__ = version("stickslip_fast")
-except PackageNotFoundError:  # running from a source tree
-    __version__ = "0.0.0+unknown"
+__version__ = package_version()
 
 __all__ = [
     "System",

@@ -280,8 +280,8 @@ def census(
     ValueError
         For bad input, naming the argument.
     """
-    from .. import __version__
     from ..backends.local import run_local
+    from ..base.version import package_version
     from .sweep import _numba_threads
 
     if not isinstance(system, System):
@@ -357,7 +357,7 @@ def census(
         if out is not None:
             file = stack.enter_context(
                 CensusFile.open(
-                    out, config, layout, title=title, notes=notes, package_version=__version__
+                    out, config, layout, title=title, notes=notes, package_version=package_version()
                 )
             )
             done = file.done_mask()

@@ -11,10 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.poincare import STATUS_NAMES
+from ..core.poincare import MAX_PERIOD, STATUS_NAMES
 from ..core.settings import STOP_KINDS
 from ..model.system import System
-from .simulate import MAX_PERIOD
 
 __all__ = ["Attractor", "Track", "CensusResult", "classify_census", "KINDS"]
 

@@ -260,10 +260,10 @@ def _numba_threads(threads: int | None):
 def _open_store(plan: _Plan, out, title: str, notes: str) -> SweepFile | MemoryStore:
     if out is None:
         return MemoryStore(plan.layout)
-    from .. import __version__
+    from ..base.version import package_version
 
     return SweepFile.open(
-        out, plan.config(), plan.layout, title=title, notes=notes, package_version=__version__
+        out, plan.config(), plan.layout, title=title, notes=notes, package_version=package_version()
     )
 
 

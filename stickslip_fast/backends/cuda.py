@@ -174,7 +174,7 @@ def compute_restart_chunk_cuda(
         integer fields (and t_converged with converged stopping). Status and
         period equal the CPU's; points agree to ~1e-9.
     """
-    from ..analysis.simulate import MAX_PERIOD
+    from ..core.poincare import MAX_PERIOD
     from .local import _pack, _param_rows
 
     check_available()
@@ -238,7 +238,7 @@ def cuda_runner(
     RuntimeError
         Without a GPU (and without NUMBA_ENABLE_CUDASIM=1).
     """
-    from ..analysis.simulate import MAX_PERIOD
+    from ..core.poincare import MAX_PERIOD
     from .local import _pack, _param_rows, run_local
 
     check_available()

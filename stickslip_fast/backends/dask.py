@@ -166,11 +166,9 @@ def _compute(
 ) -> dict[str, np.ndarray]:
     """The task: one (part of a) unit through the unchanged pure chunk function."""
     if fingerprint() != expected:
-        import stickslip_fast
-
         raise RuntimeError(
             f"this worker (pid {os.getpid()}) runs stickslip_fast from "
-            f"{Path(stickslip_fast.__file__).parent} with different code or Numba version "
+            f"{Path(__file__).parents[1]} with different code or Numba version "
             f"than the client (fingerprint {fingerprint()[:12]} != {expected[:12]}); install "
             "the same stickslip_fast and numba versions on every machine"
         )

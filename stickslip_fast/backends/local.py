@@ -18,9 +18,9 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..analysis.simulate import MAX_PERIOD
 from ..base.interrupt import call_interruptible, new_abort_flag
 from ..base.status import ST_NOT_COMPUTED
+from ..core.poincare import MAX_PERIOD
 from ..core.settings import STOP_KINDS, Settings
 from ..core.trajectory import (
     METHODS,

@@ -31,6 +31,9 @@ from ..base.status import (  # noqa: F401  (re-exported: the codes used to live 
 #: this fraction of its no-load speed v_b0.
 STALL_FRACTION = 0.01
 
+#: Longest period :func:`detect_period` looks for.
+MAX_PERIOD = 64
+
 
 @njit(**_JIT)
 def detect_period(points: np.ndarray, count: int, tol: float, max_period: int) -> int:

@@ -84,7 +84,7 @@ class SweepFile:
             else:
                 tmp = path.with_name(path.name + ".partial")
                 try:
-                    _new_file(tmp, layout, meta).close()
+                    _new_file(tmp, layout, meta, cls).close()
                 except BaseException:
                     tmp.unlink(missing_ok=True)
                     raise
@@ -153,7 +153,7 @@ class SweepFile:
         # A writer was killed (we hold the writer lock, so none is alive; HDF5 left the
         # file marked open), or parts of the file are unreadable: rebuild it from what
         # can be read, then append. Values that could not be read are computed again.
-        _rebuild(path, layout, meta, bad)
+        _rebuild(path, layout, meta, bad, cls)
         if problems:
             n_bad = int(np.count_nonzero(bad))
             warnings.warn(
@@ -418,17 +418,22 @@ def stored_config(h5: h5py.File) -> dict:
         raise ResultFileError(f"{name}: the stored configuration is not valid JSON") from None
 
 
-def _new_file(path: Path, layout: SweepLayout, meta: tuple) -> h5py.File:
-    """A fresh sweep file with the complete layout and no values (open for writing)."""
+def _new_file(
+    path: Path, layout: SweepLayout, meta: tuple, writer: type[SweepFile] | None = None
+) -> h5py.File:
+    """A fresh sweep file with the complete layout and no values (open for writing).
+
+    ``writer`` is the file class that lays it out (``SweepFile``, or its
+    subclass ``CensusFile`` for a census: the caller's ``cls``, so that this
+    module never imports the census module, which imports it).
+    """
     text, digest, config, title, notes, package_version = meta
+    writer = SweepFile if writer is None else writer
     try:
         h5 = h5py.File(path, "w", libver="latest")
     except OSError as exc:
         raise _os_error(path, exc) from None
     try:
-        from .census import CensusFile, CensusLayout  # a subclass of SweepFile: imported late
-
-        writer = CensusFile if isinstance(layout, CensusLayout) else SweepFile
         writer._create_layout(h5, layout, text, digest, config, title, notes, package_version)
         h5.flush()
     except BaseException as exc:
@@ -439,7 +444,13 @@ def _new_file(path: Path, layout: SweepLayout, meta: tuple) -> h5py.File:
     return h5
 
 
-def _rebuild(path: Path, layout: SweepLayout, meta: tuple, bad: np.ndarray) -> None:
+def _rebuild(
+    path: Path,
+    layout: SweepLayout,
+    meta: tuple,
+    bad: np.ndarray,
+    writer: type[SweepFile] | None = None,
+) -> None:
     """Copy what can be read of a damaged or crashed writer's file into a fresh one.
 
     The fresh file gets the layout this sweep would create (coordinates from the
@@ -450,7 +461,7 @@ def _rebuild(path: Path, layout: SweepLayout, meta: tuple, bad: np.ndarray) -> N
     try:
         with (
             open_h5(path, check_truncation=False) as src,
-            _new_file(tmp, layout, meta) as dst,
+            _new_file(tmp, layout, meta, writer) as dst,
         ):
             for key in ("created", "package_version"):
                 try:

@@ -54,7 +54,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
     Path
         The written file.
     """
-    from .. import __version__
+    from ..base.version import package_version
 
     path = Path(path)
     system = result.system
@@ -90,7 +90,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
         with h5py.File(tmp, "w", libver="latest") as h5:
             a = h5.attrs
             a["schema_version"] = SCHEMA_VERSION
-            a["package_version"] = __version__
+            a["package_version"] = package_version()
             a["kind"] = "trajectory"
             a["config"] = text
             a["config_sha256"] = digest
@@ -165,7 +165,7 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
     ValueError
         If the file is not a trajectory file of this schema.
     """
-    from ..analysis.simulate import SimulationResult
+    from ..core.results import SimulationResult
     from ..core.settings import Settings
     from ..model.system import System
 
