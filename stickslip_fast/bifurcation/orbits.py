@@ -48,13 +48,27 @@ from typing import Any
 import numpy as np
 
 from ..analysis.simulate import SimulationResult, simulate
-from ..base.interrupt import call_interruptible, new_abort_flag
-from ..core.poincare import STATUS_NAMES
-from ..core.trajectory import kernel_variant
-from ..core.variational import propagate_sensitivity, propagate_tangents
-from ..model.equations import dense_jacobian, friction, rhs
-from ..model.params import eta_prime
-from ..model.system import SWEEPABLE, System
+from ..model.system import System
+from .equilibria import (  # noqa: F401
+    EQUILIBRIUM_SPEED,
+    Equilibrium,
+    _belt_speed,
+    _sliding_guess,
+    find_equilibrium,
+)
+from .returnmap import (  # noqa: F401
+    _DEFAULT_ATOL,
+    _DEFAULT_RTOL,
+    _MAX_STEPS,
+    _TANGENT_ATOL,
+    SECTION_INDEX,
+    _field,
+    _finite_state,
+    _minimal_period,
+    _multipliers,
+    _sensitivity_params,
+    return_map,
+)
 
 __all__ = [
     "Orbit",
@@ -67,16 +81,12 @@ __all__ = [
     "STICK_SPEED",
 ]
 
-#: Index of the section coordinate dx1 in the state.
-SECTION_INDEX = 1
-#: A fixed point of the map where max |f| is below this is a rest point, not an orbit: near
-#: a stable focus the return map contracts onto the equilibrium, which it leaves fixed.
-EQUILIBRIUM_SPEED = 1e-8
 
 #: A disk sticks while its slip speed sqrt((dx - v_b)^2 + dphi^2) is below this many
 #: eps (the friction law's regularisation; 100 eps = 1e-3 at the presets): far below
 #: the slip speeds of a slip phase, far above the creep inside a stick phase.
 STICK_SPEED = 100.0
+
 
 #: Outcomes of :func:`find_orbit` (``Orbit.status``).
 ORBIT_STATUSES = (
@@ -87,11 +97,6 @@ ORBIT_STATUSES = (
     "equilibrium",  # converged onto a rest point (|f| ~ 0 there), not an orbit
     "integration-failed",  # the return map could not be evaluated at the start
 )
-
-_DEFAULT_RTOL = 1e-11
-_DEFAULT_ATOL = 1e-13
-_TANGENT_ATOL = 1e-10
-_MAX_STEPS = 10_000_000
 
 
 @dataclass
@@ -155,204 +160,6 @@ class Orbit:
             f"Orbit(status={self.status!r}, period={self.period}, T={self.T:.10g}, "
             f"residual={self.residual:.2e}, multipliers=[{mult}], stable={self.stable})"
         )
-
-
-@dataclass
-class Equilibrium:
-    """An equilibrium found by :func:`find_equilibrium`.
-
-    Attributes
-    ----------
-    system : System
-    state : ndarray, shape (n_state,)
-    eigenvalues : ndarray of complex
-        Eigenvalues of the analytic Jacobian at ``state``, largest real part first.
-    stable : bool
-        Converged and every eigenvalue with a negative real part.
-    kind : str
-        "sliding" (constant belt, or a DC belt running above 1% of v_b0) or
-        "stall" (a DC belt below 1% of v_b0).
-    residual : float
-        max |f(state)|.
-    iterations : int
-    converged : bool
-    """
-
-    system: System
-    state: np.ndarray
-    eigenvalues: np.ndarray
-    stable: bool
-    kind: str
-    residual: float
-    iterations: int
-    converged: bool
-
-
-# ----------------------------------------------------------------- the map
-def _finite_state(name: str, value: Any, n: int) -> np.ndarray:
-    try:
-        y = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an array of {n} real numbers: {exc}") from None
-    if y.shape != (n,):
-        raise ValueError(f"{name} must have shape ({n},), got {y.shape}")
-    if not np.all(np.isfinite(y)):
-        raise ValueError(f"{name} must be finite, got {y}")
-    return y
-
-
-def _field(system: System, y: np.ndarray) -> np.ndarray:
-    f = np.empty(y.size)
-    rhs(y, system.to_array(), system.n_oscillators, system.is_dc_motor, f)
-    return f
-
-
-def return_map(
-    system: System,
-    z: np.ndarray,
-    period: int = 1,
-    *,
-    rtol: float = _DEFAULT_RTOL,
-    atol: float = _DEFAULT_ATOL,
-    t_max: float = 1e4,
-    tangents: bool = True,
-    tangent_atol: float = _TANGENT_ATOL,
-    param: str | None = None,
-    param_step: float = 1e-7,
-) -> tuple[str, np.ndarray, np.ndarray, np.ndarray | None]:
-    """Evaluate P^p on the section and (optionally) its Jacobian.
-
-    Parameters
-    ----------
-    system : System
-    z : array_like, shape (n_state,)
-        A point on the section; its dx1 entry is set to 0.
-    period : int
-        p, the number of crossings.
-    rtol, atol : float
-        Integration tolerances.
-    t_max : float
-        Longest time allowed from one crossing to the next.
-    tangents : bool
-        Also integrate the n - 1 tangent vectors and return the Jacobian.
-    tangent_atol : float
-        Error tolerance of a tangent vector relative to its length (1e-8
-        leaves errors of ~1e-6 in the Jacobian at the presets; 1e-10 ~1e-9).
-    param : str, optional
-        A :class:`System` field (one of ``SWEEPABLE``): with ``tangents``, also
-        integrate the sensitivity to it and return dP^p/d param as the
-        Jacobian's last column.
-    param_step : float
-        Relative step h / max(1, |param|) of the central difference of the
-        vector field and its Jacobian in ``param`` (one-sided at the edge of
-        the parameter's valid range). It differences the model's equations, not
-        the map, so no integration error is divided by h.
-
-    Returns
-    -------
-    status : str
-        "ok", or the driver's status of a failed segment ("no-crossings" when a
-        segment reached ``t_max`` without a crossing).
-    points : ndarray, shape (p, n_state)
-        The states at crossings 1..p (``points[-1]`` = P^p(z)).
-    times : ndarray, shape (p,)
-        Times from z to each crossing.
-    jacobian : ndarray, shape (n_state - 1, n_state - 1) or None
-        D P^p(z) in section coordinates (None without ``tangents``); with
-        ``param``, shape (n_state - 1, n_state): [D_z P^p, dP^p/d param].
-
-    Raises
-    ------
-    ValueError
-        For an unknown ``param``, or one that has no valid value on either side
-        of its current one.
-    """
-    n = system.n_state
-    mask = np.arange(n) != SECTION_INDEX
-    p_arr = system.to_array()
-    y = np.array(z, dtype=float)
-    # a unit vector when no tangents are wanted: the tangent error norm is relative to |u|
-    U = np.ascontiguousarray(np.eye(n)[:, mask] if tangents else np.eye(n)[:, :1])
-    sens_p, sens_inv = _sensitivity_params(system, param if tangents else None, param_step)
-    if sens_p is not None:
-        U = np.ascontiguousarray(np.hstack([U, np.zeros((n, 1))]))
-    variant = kernel_variant(system.n_oscillators, system.is_dc_motor)
-    pts = np.full((period, n), np.nan)
-    times = np.full(period, np.nan)
-    t_acc = 0.0
-    e = np.zeros(n)
-    e[SECTION_INDEX] = 1.0
-    for i in range(period):
-        y[SECTION_INDEX] = 0.0  # exactly on the section: no crossing at t = 0
-        args = (y, U, p_arr, system.n_oscillators, system.is_dc_motor, variant, float(t_max), 1,
-                float(rtol), float(atol), float(tangent_atol))  # fmt: skip
-        if sens_p is None:
-            code, y1, U1, t = call_interruptible(
-                propagate_tangents, *args, _MAX_STEPS, abort=new_abort_flag()
-            )
-        else:
-            code, y1, U1, t = call_interruptible(
-                propagate_sensitivity, *args, sens_p, sens_inv, _MAX_STEPS, abort=new_abort_flag()
-            )  # fmt: skip
-        status = STATUS_NAMES[code]
-        if status == "ok" and not math.isfinite(t):
-            status = "no-crossings"
-        if status != "ok" or not np.all(np.isfinite(y1)):
-            return (status if status != "ok" else "nonfinite"), pts, times, None
-        t_acc += t
-        pts[i] = y1
-        times[i] = t_acc
-        if tangents:
-            f = _field(system, y1)
-            # projection along the flow onto the section (see the module docstring)
-            U = np.ascontiguousarray(U1 - np.outer(f, U1[SECTION_INDEX] / f[SECTION_INDEX]))
-        y = np.ascontiguousarray(y1)
-    jac = U[mask] if tangents else None
-    return "ok", pts, times, jac
-
-
-def _sensitivity_params(system: System, param: str | None, rel_step: float):
-    """(p2, inv) of :func:`propagate_sensitivity` for the sensitivity to ``param``.
-
-    Rows: the packed parameters at param + h and param - h, or at param and one
-    of them where the other is outside the parameter's valid range. (None, 0.0)
-    without ``param``.
-    """
-    if param is None:
-        return None, 0.0
-    if param not in SWEEPABLE:
-        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
-    if not (isinstance(rel_step, (int, float)) and 0 < rel_step < 1e-2):
-        raise ValueError(f"param_step must be a number in (0, 0.01), got {rel_step!r}")
-    lam = float(getattr(system, param))
-    h = rel_step * max(1.0, abs(lam))
-
-    def at(v):
-        try:
-            return system.replace(**{param: v}).to_array(), v
-        except ValueError:  # outside the parameter's valid range
-            return None
-
-    hi, lo = at(lam + h), at(lam - h)
-    if hi is None and lo is None:
-        raise ValueError(f"{param} = {lam} has no valid value within {h:g} on either side")
-    hi = hi or (system.to_array(), lam)
-    lo = lo or (system.to_array(), lam)
-    return np.ascontiguousarray(np.stack([hi[0], lo[0]])), 1.0 / (hi[1] - lo[1])
-
-
-def _multipliers(jac: np.ndarray) -> np.ndarray:
-    ev = np.linalg.eigvals(jac).astype(complex)
-    return ev[np.argsort(-np.abs(ev), kind="stable")]
-
-
-def _minimal_period(points: np.ndarray, tol: float) -> int:
-    p = points.shape[0]
-    scale = max(1.0, float(np.max(np.abs(points))))
-    for q in range(1, p):
-        if p % q == 0 and np.max(np.abs(points[q:] - points[:-q])) <= 100 * tol * scale:
-            return q
-    return p
 
 
 # ------------------------------------------------------------------ orbits
@@ -587,147 +394,6 @@ def _orbit(system, period, z, pts, times, jac, res, it, status, message, history
         status=status,
         message=message,
         history=history,
-    )
-
-
-# ------------------------------------------------------------- equilibria
-def _sliding_guess(system: System, vb: float) -> np.ndarray:
-    """dx = dphi = 0 at belt speed vb: the springs balance the sliding friction."""
-    n = system.n_state
-    y = np.zeros(n)
-    ts, ms = friction(-vb, 0.0, system.eps, eta_prime(system.eta))
-    a = np.array([[1.0, system.k12], [system.k12, 1.0]])
-    rhs_ = -system.mu * np.array([ts, ms])
-    try:
-        x, ph = np.linalg.solve(a, rhs_)
-    except np.linalg.LinAlgError:
-        x, ph = 0.0, 0.0
-    for i in range(system.n_oscillators):
-        y[4 * i] = x
-        y[4 * i + 2] = ph
-    if system.is_dc_motor:
-        y[-1] = vb
-    return y
-
-
-def _belt_speed(system: System, which: str) -> float:
-    """The belt speed of a rest point: v_b (constant belt), or a root of the motor equation.
-
-    At rest every disk has slip velocity -v_b, so the DC motor's equation reads
-    g(v) = v_b0 + beta T_s(-v, 0) - v = 0. Its roots are bracketed on a log grid
-    from 1e-4 eps to 2 v_b0: the largest is steady sliding, the smallest (inside
-    the stick band, when the load is strong enough) the stall.
-    """
-    if not system.is_dc_motor:
-        return system.vb
-    etap = eta_prime(system.eta)
-
-    def g(v: float) -> float:
-        return system.vb0 + system.beta * friction(-v, 0.0, system.eps, etap)[0] - v
-
-    grid = np.geomspace(1e-4 * system.eps, 2.0 * max(system.vb0, system.eps), 2000)
-    vals = np.array([g(v) for v in grid])
-    roots = []
-    for i in np.nonzero(np.sign(vals[:-1]) != np.sign(vals[1:]))[0]:
-        a, b = grid[i], grid[i + 1]
-        for _ in range(200):  # bisection
-            mid = 0.5 * (a + b)
-            if np.sign(g(mid)) == np.sign(g(a)):
-                a = mid
-            else:
-                b = mid
-            if b - a <= 1e-15 * b:
-                break
-        roots.append(0.5 * (a + b))
-    if which == "sliding":
-        return roots[-1] if roots else system.vb0
-    # no root below 1% of v_b0: no stall; Newton from v_b = eps then reports converged=False
-    # rather than returning the sliding state for a stall
-    return roots[0] if roots and roots[0] < 0.01 * system.vb0 else system.eps
-
-
-def find_equilibrium(
-    system: System,
-    start: Any = "sliding",
-    *,
-    tol: float = 1e-12,
-    max_iter: int = 50,
-) -> Equilibrium:
-    """Find an equilibrium (steady sliding, or the stalled DC motor) by Newton on f(y) = 0.
-
-    Parameters
-    ----------
-    system : System
-    start : {"sliding", "stall"} or array_like
-        ``"sliding"``: the disks at rest on a belt running at v_b (constant
-        drive) or at the largest root of the motor equation (DC motor; see
-        :func:`_belt_speed`). ``"stall"`` (DC motor only): the smallest root,
-        the belt nearly stopped inside the friction law's stick band (it exists
-        when beta times the friction peak exceeds about v_b0). The springs then
-        balance the sliding friction. Or a state to start Newton from.
-    tol : float
-        Convergence: max |f(y)| <= tol.
-    max_iter : int
-        Most Newton steps (each halved until |f| decreases).
-
-    Returns
-    -------
-    Equilibrium
-
-    Raises
-    ------
-    ValueError
-        For an unknown start, a non-finite start state, or ``"stall"`` with a
-        constant belt.
-    """
-    if not isinstance(system, System):
-        raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
-    if isinstance(start, str):
-        if start not in ("sliding", "stall"):
-            raise ValueError(f'start must be "sliding", "stall" or a state, got {start!r}')
-        if start == "stall" and not system.is_dc_motor:
-            raise ValueError('start="stall" needs a DC-motor drive (drive="dc-motor")')
-        y = _sliding_guess(system, _belt_speed(system, start))
-    else:
-        y = _finite_state("start", start, system.n_state)
-    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
-    p = system.to_array()
-    nosc, dc = system.n_oscillators, system.is_dc_motor
-    f = _field(system, y)
-    res = float(np.max(np.abs(f)))
-    it = 0
-    while res > tol and it < max_iter:
-        jac = dense_jacobian(y, p, nosc, dc)
-        try:
-            dy = np.linalg.solve(jac, -f)
-        except np.linalg.LinAlgError:
-            break
-        it += 1
-        lam = 1.0
-        for _ in range(30):
-            y_new = y + lam * dy
-            f_new = _field(system, y_new)
-            r_new = float(np.max(np.abs(f_new)))
-            if np.isfinite(r_new) and r_new < res:
-                break
-            lam *= 0.5
-        else:
-            break
-        y, f, res = y_new, f_new, r_new
-    converged = res <= tol
-    ev = np.linalg.eigvals(dense_jacobian(y, p, nosc, dc)).astype(complex)
-    ev = ev[np.argsort(-ev.real, kind="stable")]
-    kind = "stall" if dc and abs(y[-1]) < 0.01 * abs(system.vb0) else "sliding"
-    return Equilibrium(
-        system=system,
-        state=y,
-        eigenvalues=ev,
-        stable=bool(converged and np.all(ev.real < 0)),
-        kind=kind,
-        residual=res,
-        iterations=it,
-        converged=converged,
     )
 
 

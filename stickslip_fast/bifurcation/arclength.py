@@ -1,0 +1,366 @@
+"""The pseudo-arclength predictor-corrector on any smooth map given as a callable.
+
+It knows nothing of the model, so it is tested on maps whose bifurcations are known in
+closed form; :mod:`.orbit_branch` and :mod:`.equilibrium_branch` give it their evaluators."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .detection import _sorted_eigs, _tests
+
+#: A branch ends with status "precision-limit" where its last this many steps together
+#: advance less than the ``ds_min`` given (possible only in the tighter stages).
+STALL_WINDOW = 10
+
+
+# evaluate(x) -> (ok, G (m,), DG (m, m + 1), A (m, m)): residual, its Jacobian in (z, lambda),
+# and the map's Jacobian in z (whose eigenvalues are the multipliers)
+Evaluator = Callable[[np.ndarray], tuple[bool, np.ndarray, np.ndarray, np.ndarray]]
+
+
+# ------------------------------------------------------------------ the core
+def _tangent(DG: np.ndarray, prev: np.ndarray) -> np.ndarray:
+    """Unit null vector of DG (m x (m+1)), oriented along ``prev``."""
+    m = DG.shape[0]
+    A = np.vstack([DG, prev[None, :]])
+    rhs = np.zeros(m + 1)
+    rhs[-1] = 1.0
+    t = np.linalg.solve(A, rhs)
+    return t / np.linalg.norm(t)
+
+
+#: What :func:`_correct` returns in place of (G, DG, A) when it stopped at the residual's
+#: round-off floor: converged as far as the arithmetic allows, but not to ``tol``.
+NOISE_FLOOR = "noise-floor"
+
+
+def _round_off_floor(DG: np.ndarray, x: np.ndarray) -> float:
+    """eps ||DG|| ||x|| (max norms): the residual that rounding errors of x's size can cause.
+
+    The evaluation noise of a strongly unstable orbit's return map scales with its
+    Jacobian: past the upper fold of Fig. 6's period-1 branch (multiplier 1e2 to 4e3), G
+    at x and at x moved by ~1e-14 relative differ from the linear prediction by up to
+    0.09-0.35 times this (rtol 1e-11 and 1e-13; docs/orbits.md, "Cost").
+    """
+    return float(np.finfo(float).eps * np.max(np.abs(DG).sum(axis=1)) * np.max(np.abs(x)))
+
+
+def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
+    """Newton on [G(x); normal . (x - anchor)] = 0 from x_pred.
+
+    Converged when max |G| <= tol and |normal . (x - anchor)| <= tol. Fails early
+    (docs/orbits.md, "Cost") where more iterations would only resample the
+    evaluation's noise:
+
+    - at the round-off floor: the Newton update is below ``tol`` and max |G|,
+      above ``tol``, is below :func:`_round_off_floor` and did not halve in this
+      iteration (returned with :data:`NOISE_FLOOR` in place of the data);
+    - stalled: in Newton's local regime (update below sqrt(tol)), two iterations
+      in a row did not halve the smallest residual so far.
+
+    Neither accepts a point the plain test would reject.
+
+    Returns
+    -------
+    (converged, x, (G, DG, A) or None or NOISE_FLOOR, iterations)
+    """
+    x = x_pred.copy()
+    best, stalled = math.inf, 0
+    for it in range(max_iter + 1):
+        ok, G, DG, A = evaluate(x)
+        if not ok:
+            return False, x, None, it
+        res = float(np.max(np.abs(G)))
+        h = float(normal @ (x - anchor))
+        if res <= tol and abs(h) <= tol:
+            return True, x, (G, DG, A), it
+        # Newton near a root gains digits quadratically: a residual that does not halve
+        # is noise (the integration's or the rounding's), not progress
+        if res < 0.5 * best:
+            best, stalled = res, 0
+        else:
+            stalled += 1
+        J = np.vstack([DG, normal[None, :]])
+        try:
+            dx = np.linalg.solve(J, -np.r_[G, h])
+        except np.linalg.LinAlgError:
+            return False, x, None, it
+        step = float(np.max(np.abs(dx)))
+        if stalled and step <= tol and abs(h) <= tol and res <= _round_off_floor(DG, x):
+            return False, x, NOISE_FLOOR, it
+        if stalled >= 2 and step <= math.sqrt(tol):
+            return False, x, None, it
+        if it == max_iter:
+            break
+        x = x + dx
+        if not np.all(np.isfinite(x)):
+            return False, x, None, it
+    return False, x, None, max_iter
+
+
+def pseudo_arclength(
+    evaluate: Evaluator,
+    x0: np.ndarray,
+    direction: float,
+    bounds: tuple[float, float],
+    *,
+    ds: float,
+    ds_min: float,
+    ds_max: float,
+    max_points: int,
+    tol: float,
+    locate_tol: float = 1e-9,
+    max_corrector: int = 6,
+    jump: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+    tests: Callable[[np.ndarray, np.ndarray], dict[str, float]] = _tests,
+    spectrum: Callable[[np.ndarray], np.ndarray] | None = None,
+    refine: Sequence[tuple[Evaluator, float, float]] = (),
+):
+    """Follow G(x) = 0, x = (z, lambda), by pseudo-arclength continuation.
+
+    Parameters
+    ----------
+    evaluate : callable
+        x -> (ok, G, DG, A): the residual, its Jacobian (m x (m + 1)) and the
+        map's Jacobian in z (m x m; its eigenvalues are the multipliers).
+    x0 : ndarray, shape (m + 1,)
+        A solution (G(x0) ~ 0).
+    direction : float
+        +1 to start towards increasing lambda, -1 towards decreasing.
+    bounds : (float, float)
+        The branch ends on the first of them it reaches: a step that would
+        leave [lo, hi] is corrected with lambda fixed at the bound instead.
+    ds, ds_min, ds_max : float
+        First, smallest and largest arclength step. The step grows by 1.5
+        after a corrector that needed <= 3 iterations, halves after a failure.
+    max_points : int
+    tol : float
+        Corrector tolerance on max |G|.
+    locate_tol : float
+        Bifurcations are located (Illinois secant on the test function along
+        the chord between two branch points) until lambda moves less than this.
+    max_corrector : int
+        Most corrector iterations per step.
+    jump : callable, optional
+        (x_old, x_new) -> True when x_new is not on the same smooth branch
+        (for orbits: the period in time jumped). Such a step, like a failed
+        corrector or one that moved more than ds / 2 from the predictor, is
+        rejected and ds halved. When ds falls below ds_min and the last
+        rejection was a jump, the branch ends with status "nonsmooth" within
+        ds_min of the discontinuity; otherwise with "step-too-small".
+    tests : callable
+        (A, tangent) -> {kind: value}: test functions whose sign changes mark
+        bifurcations (default: those of a map's fixed points, fold /
+        period-doubling / Neimark-Sacker; equilibria use fold / Hopf).
+    spectrum : callable, optional
+        A -> the eigenvalues recorded per point (default: by modulus, largest first).
+    refine : sequence of (evaluate, tol, ds_min)
+        Tighter settings to go on with, in turn, where the corrector fails at
+        ``ds_min`` (not where the steps jump off the branch): the last point is
+        corrected again with the next stage's evaluator and ``tol`` (or, if
+        that fails, one of the few before it: :func:`_restart`; the points after
+        it are dropped), and the continuation resumes from it with
+        ``ds = ds_min`` and the stage's smaller ``ds_min``. The branch ends when
+        no stage is left (or no recent point can be corrected with it). For sharp folds whose turn is
+        narrower than ``ds_min`` or whose parameter extent is below ``tol`` over
+        the residual's sensitivity to lambda (docs/limits.md).
+
+    Returns
+    -------
+    xs, mults, bifs, status
+        The points (k, m + 1), their multipliers (k, m), the located
+        bifurcations (kind, lambda, index, x) and the reason the branch ended:
+        "bounds", "max-points", "step-too-small" (the corrector failed),
+        "nonsmooth" (steps kept jumping off the branch) or "precision-limit"
+        (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
+        less than ``ds_min``; or the last corrector stopped at the residual's
+        round-off floor, :func:`_correct`, with no stage left).
+    """
+    ok, G, DG, A = evaluate(x0)
+    if not ok:
+        raise ValueError("the start could not be evaluated")
+    m = G.size
+    guess = np.zeros(m + 1)
+    guess[-1] = 1.0 if direction >= 0 else -1.0
+    t = _tangent(DG, guess)
+    xs = [x0.copy()]
+    spectrum = spectrum or _sorted_eigs
+    test_fn = tests
+    mults = [spectrum(A)]
+    tests = [test_fn(A, t)]
+    bifs: list[tuple[str, float, int, np.ndarray]] = []
+    lo, hi = bounds
+    status = "max-points"
+    stages = list(refine)
+    ds_min_given = ds_min
+    while len(xs) < max_points:
+        x = xs[-1]
+        accepted = False
+        jumped = False
+        floored = False  # the last rejection: a corrector at the round-off floor
+        on_bound = False
+        while ds >= ds_min:
+            x_pred = x + ds * t
+            if not lo <= x_pred[-1] <= hi:
+                # the step leaves the interval: end on its bound (lambda fixed there)
+                edge = x_pred.copy()
+                edge[-1] = hi if x_pred[-1] > hi else lo
+                e_lam = np.zeros_like(x)
+                e_lam[-1] = 1.0
+                okc, x_new, data, its = _correct(evaluate, edge, e_lam, edge, tol, max_corrector)
+                if okc and not (jump is not None and jump(x, x_new)):
+                    on_bound = True
+                    accepted = True
+                    break
+                floored = data is NOISE_FLOOR
+                ds *= 0.5
+                continue
+            okc, x_new, data, its = _correct(evaluate, x_pred, t, x_pred, tol, max_corrector)
+            jumped = False
+            floored = data is NOISE_FLOOR
+            if okc:
+                jumped = bool(jump is not None and jump(x, x_new))
+                # a corrector that went far from the predictor has left the branch
+                if not jumped and np.linalg.norm(x_new - x_pred) <= 0.5 * ds:
+                    accepted = True
+                    break
+            ds *= 0.5
+        if not accepted:
+            restart = None
+            while not jumped and stages and restart is None:
+                # a sharp end: correct a recent point again with tighter settings, go on
+                evaluate, tol, ds_min_next = stages.pop(0)
+                restart = _restart(evaluate, xs, tol, max_corrector)
+                if restart is not None:
+                    ds, ds_min = ds_min, min(ds_min, ds_min_next)
+            if restart is None:
+                status = "nonsmooth" if jumped else "step-too-small"
+                if floored:  # the residual's noise, not the step, stopped the corrector
+                    status = "precision-limit"
+                break
+            j, x_re, (_, DG, A) = restart
+            t = _tangent(DG, xs[j] - xs[j - 1] if j > 0 else t)
+            del xs[j + 1 :], mults[j + 1 :], tests[j + 1 :]
+            xs[j] = x_re
+            mults[j] = spectrum(A)
+            tests[j] = test_fn(A, t)
+            bifs = [b for b in bifs if b[2] < j]
+            continue
+        G, DG, A = data
+        t_new = _tangent(DG, t)
+        te = test_fn(A, t_new)
+        k = len(xs) - 1
+        for kind, prev in tests[-1].items():
+            cur = te[kind]
+            if math.isfinite(prev) and math.isfinite(cur) and prev * cur < 0:
+                loc = _locate(evaluate, x, x_new, kind, prev, cur, t, tol, locate_tol, test_fn)
+                if loc is not None:
+                    bifs.append((kind, float(loc[-1]), k, loc))
+        xs.append(x_new)
+        mults.append(spectrum(A))
+        tests.append(te)
+        t = t_new
+        if on_bound:
+            status = "bounds"
+            break
+        if len(xs) > STALL_WINDOW:
+            # only the tighter stages take steps below ds_min: a crawl there means that
+            # Newton's reach has shrunk to the integration's precision (docs/limits.md)
+            last = np.asarray(xs[-STALL_WINDOW - 1 :])
+            if np.linalg.norm(np.diff(last, axis=0), axis=1).sum() < ds_min_given:
+                status = "precision-limit"
+                break
+        if its <= 3:
+            ds = min(ds * 1.5, ds_max)
+    return np.array(xs), np.array(mults), bifs, status
+
+
+def _restart(
+    evaluate: Evaluator, xs: list[np.ndarray], tol: float, max_corrector: int, back: int = 6
+) -> tuple[int, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
+    """A recent branch point corrected again (with ``evaluate`` and ``tol``), or None.
+
+    Tries the last ``back`` points, newest first, each on the hyperplane through it
+    normal to the chord from its predecessor, then with lambda fixed; a result is
+    kept if it lies closer to the old point than half that chord (the same branch).
+    A point computed to a looser tolerance near a sharp fold can lie past the fold
+    (its lambda off by ~tol / |dG/dlambda|), where neither has a solution: the
+    search then goes back along the branch. Returns (index, point, (G, DG, A)).
+    """
+    e_lam = np.zeros_like(xs[-1])
+    e_lam[-1] = 1.0
+    for j in range(len(xs) - 1, max(len(xs) - 1 - back, -1), -1):
+        chord = xs[j] - xs[j - 1] if j > 0 else e_lam
+        reach = 0.5 * float(np.linalg.norm(chord)) if j > 0 else math.inf
+        for normal in (chord / np.linalg.norm(chord), e_lam):
+            okc, x, data, _ = _correct(evaluate, xs[j], normal, xs[j], tol, max_corrector)
+            if okc and np.linalg.norm(x - xs[j]) <= reach:
+                return j, x, data
+    return None
+
+
+def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol, test_fn=_tests):
+    """Illinois secant in sigma in [0, 1] on the chord xa -> xb, correcting each point."""
+    chord = xb - xa
+    normal = chord / np.linalg.norm(chord)
+    a, b = 0.0, 1.0
+    side = 0
+    x_best = None
+    lam_prev = math.inf
+    for _ in range(60):
+        sig = (a * fb - b * fa) / (fb - fa)
+        if not a < sig < b:
+            sig = 0.5 * (a + b)
+        anchor = xa + sig * chord
+        okc, x, data, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
+        if not okc:
+            return x_best
+        _, DG, A = data
+        f = test_fn(A, _tangent(DG, t_a))[kind]
+        x_best = x
+        if abs(x[-1] - lam_prev) <= locate_tol or f == 0.0 or b - a < 1e-14:
+            return x
+        lam_prev = x[-1]
+        if f * fa > 0:
+            a, fa = sig, f
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b, fb = sig, f
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return x_best
+
+
+def _locate_change(evaluate, xa, xb, count_a, count_at, tol, locate_tol):
+    """Bisection on the chord xa -> xb (each trial corrected onto the branch) for where
+    the integer ``count_at(x)`` stops being ``count_a``; returns the first point past it
+    (xb if no trial converges), within ``locate_tol`` in the parameter."""
+    chord = xb - xa
+    normal = chord / np.linalg.norm(chord)
+    a, b = 0.0, 1.0
+    x_past = xb
+    for _ in range(60):
+        if abs(chord[-1]) * (b - a) <= locate_tol:
+            break
+        sig = 0.5 * (a + b)
+        anchor = xa + sig * chord
+        okc, x, _, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
+        if not okc:
+            break
+        try:
+            same = count_at(x) == count_a
+        except ValueError:  # the orbit could not be sampled there
+            break
+        if same:
+            a = sig
+        else:
+            b = sig
+            x_past = x
+    return x_past

@@ -1,0 +1,293 @@
+"""Continuation of periodic orbits: fixed points of the Poincare map P^p(., lambda)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from ..model.system import SWEEPABLE
+from .arclength import _locate_change, pseudo_arclength
+from .branch import Bifurcation, Branch
+from .orbits import (
+    EQUILIBRIUM_SPEED,
+    SECTION_INDEX,
+    Orbit,
+    _field,
+    return_map,
+    stick_phases,
+)
+
+#: Tighter settings :func:`continue_orbit` goes on with, in turn, where the corrector fails
+#: at ``ds_min`` (``sharp_ends=True``): (tol, rtol, atol, ds_min). The sharp ends of
+#: Fig. 6's period-1 branch are folds narrower than the defaults resolve (docs/limits.md):
+#: at eta = 3.3236646195 the branch turns within ~1.5e-9 in arclength (below ds_min = 1e-8)
+#: and its parameter moves ~1e-8 there, the residual's tol 1e-10 over dP/deta ~ 0.01; at
+#: eta = 1.8430158079 the turn is ~2e-11 in eta and the map's integration noise at
+#: rtol 1e-11 (~5e-14) matters too.
+SHARP_END_STAGES: tuple[tuple[float, float, float, float], ...] = (
+    (1e-13, 1e-11, 1e-13, 1e-14),
+    (1e-14, 1e-13, 1e-15, 1e-16),
+)
+
+
+# ------------------------------------------------------------------ orbits
+def _difference(value_at, lam: float, h: float, centre):
+    """d value / d lambda: central, or one-sided at the edge of the parameter's valid
+    range (value_at raises ValueError outside it, or returns None on failure)."""
+
+    def at(v):
+        try:
+            return value_at(v)
+        except ValueError:
+            return None
+
+    plus, minus = at(lam + h), at(lam - h)
+    if plus is not None and minus is not None:
+        return (plus - minus) / (2 * h)
+    if plus is not None and centre is not None:
+        return (plus - centre) / h
+    if minus is not None and centre is not None:
+        return (centre - minus) / h
+    return None
+
+
+def _check_args(system, what, param, bounds, ds, ds_min, ds_max, tol, max_points):
+    """The continuation arguments, checked; returns (start value, lo, hi)."""
+    if param not in SWEEPABLE or param == "n_oscillators":
+        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
+    try:
+        lo, hi = (float(v) for v in bounds)
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds must be two numbers (lo, hi), got {bounds!r}") from None
+    lam0 = float(getattr(system, param))
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= lam0 <= hi):
+        raise ValueError(f"bounds {bounds!r} must contain the {what}'s {param} = {lam0}")
+    for name, v in (("ds", ds), ("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+    if not ds_min <= ds <= ds_max:
+        raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
+    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
+        raise ValueError(f"max_points must be an integer >= 2, got {max_points!r}")
+    return lam0, lo, hi
+
+
+def _orbit_evaluator(
+    system0,
+    param: str,
+    p: int,
+    rtol: float,
+    atol: float,
+    fd_step: float,
+    periods: dict[bytes, float] | None = None,
+):
+    """The residual G(z, lambda) = P^p(z) - z of an orbit branch, and its helpers.
+
+    Returns ``(evaluate, full, system_at, periods)``: ``evaluate(x)`` for
+    :func:`pseudo_arclength` (x = section coordinates and lambda; the map's
+    Jacobian in z and its derivative in lambda from the variational equations
+    and the parameter sensitivity, integrated together), ``full(x)`` the state
+    on the section, ``system_at(lam)`` and
+    ``periods`` (the return time of every evaluated x, keyed by its bytes; pass
+    a dict to share it between evaluators of different tolerances).
+    """
+    n = system0.n_state
+    mask = np.arange(n) != SECTION_INDEX
+    kw = dict(rtol=rtol, atol=atol)
+
+    def full(x):
+        z = np.zeros(n)
+        z[mask] = x[:-1]
+        return z
+
+    def system_at(lam):
+        return dataclasses.replace(system0, **{param: float(lam)})
+
+    cache: dict[bytes, Any] = {}
+    if periods is None:
+        periods = {}
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key in cache:
+            return cache[key]
+        lam = float(x[-1])
+        try:
+            s = system_at(lam)
+        except ValueError:  # outside the parameter's valid range
+            return False, None, None, None
+        z = full(x)
+        # [D_z P^p, dP^p/dlambda] in one integration: the tangents and the parameter
+        # sensitivity together (a central difference of the map would take two more)
+        st, pts, times, jac_full = return_map(s, z, p, param=param, param_step=fd_step, **kw)
+        if st != "ok":
+            return False, None, None, None
+        jac = jac_full[:, :-1]
+        G = pts[-1][mask] - x[:-1]
+        DG = jac_full.copy()
+        DG[:, :-1] -= np.eye(n - 1)
+        out = (True, G, DG, jac)
+        periods[key] = float(times[-1])
+        cache.clear()
+        cache[key] = out
+        return out
+
+    return evaluate, full, system_at, periods
+
+
+def continue_orbit(
+    orbit: Orbit,
+    param: str,
+    bounds: tuple[float, float],
+    *,
+    ds: float = 0.01,
+    ds_min: float = 1e-8,
+    ds_max: float = 0.05,
+    max_points: int = 200,
+    direction: float = 1.0,
+    tol: float = 1e-10,
+    rtol: float = 1e-11,
+    atol: float = 1e-13,
+    fd_step: float = 1e-7,
+    stick_events: bool = True,
+    sharp_ends: bool = True,
+) -> Branch:
+    """Continue a periodic orbit in one parameter (pseudo-arclength).
+
+    Parameters
+    ----------
+    orbit : Orbit
+        A converged orbit from :func:`find_orbit`.
+    param : str
+        A :class:`System` field (one of ``SWEEPABLE``), e.g. "eta".
+    bounds : (float, float)
+        The parameter interval; it must contain the orbit's value.
+    ds, ds_min, ds_max : float
+        First, smallest and largest step in arclength (section coordinates and
+        the parameter together).
+    max_points : int
+        Most branch points.
+    direction : float
+        +1: start towards increasing ``param``; -1: decreasing.
+    tol : float
+        Corrector tolerance on max |P^p(z) - z|.
+    rtol, atol : float
+        Integration tolerances of the return map.
+    fd_step : float
+        Relative step of the central difference of the vector field and its
+        Jacobian in the parameter, which drives the parameter sensitivity that
+        gives dP/dlambda (one-sided at the edge of the parameter's valid range;
+        see :func:`~stickslip_fast.orbits.return_map`).
+    stick_events : bool
+        Record the stick phases of every point (``Branch.stick_count``,
+        ``stick_time``; :func:`~stickslip_fast.orbits.stick_phases`) and locate
+        every change of their number between two points (bisection on the
+        branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
+    sharp_ends : bool
+        Where the corrector fails at ``ds_min``, go on with the tighter
+        settings of :data:`SHARP_END_STAGES` in turn (corrector tolerance,
+        integration tolerances, smallest step; each only where tighter than the
+        ones given), from the last point corrected again with them. This passes
+        folds narrower than the defaults resolve, e.g. both ends of Fig. 6's
+        period-1 branch (docs/limits.md). The branch keeps the tighter settings
+        from there on; ``T`` and the points are those of the stage that
+        computed them.
+
+    Returns
+    -------
+    Branch
+
+    Raises
+    ------
+    ValueError
+        For an unconverged orbit, an unknown ``param``, bounds that do not
+        contain the start, or non-positive step sizes (naming the argument).
+    """
+    if not isinstance(orbit, Orbit) or not orbit.converged:
+        raise ValueError("orbit must be a converged Orbit from find_orbit")
+    lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
+                               max_points)  # fmt: skip
+    system0 = orbit.system
+    p = orbit.period
+    evaluate, full, system_at, periods = _orbit_evaluator(system0, param, p, rtol, atol, fd_step)
+    kw = dict(rtol=rtol, atol=atol)
+    mask = np.arange(system0.n_state) != SECTION_INDEX
+
+    def jump(x_old, x_new):
+        t_old = periods.get(x_old.tobytes(), math.nan)
+        t_new = periods.get(x_new.tobytes(), math.nan)
+        if not abs(t_new - t_old) <= 0.05 * t_old:
+            return True
+        # a rest point is a fixed point of the map too (near a stable focus): not the branch
+        f = _field(system_at(x_new[-1]), full(x_new))
+        return bool(np.max(np.abs(f)) < EQUILIBRIUM_SPEED)
+
+    refine = []
+    if sharp_ends:
+        cur = (tol, rtol, atol, ds_min)
+        for stage in SHARP_END_STAGES:
+            nxt = tuple(min(a, b) for a, b in zip(cur, stage))
+            if nxt != cur:
+                ev, _, _, _ = _orbit_evaluator(system0, param, p, nxt[1], nxt[2], fd_step,
+                                               periods)  # fmt: skip
+                refine.append((ev, nxt[0], nxt[3]))
+                cur = nxt
+    x0 = np.r_[orbit.points[0][mask], lam0]
+    evaluate(x0)
+    xs, mults, bifs, status = pseudo_arclength(
+        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
+        max_points=max_points, tol=tol, jump=jump, refine=refine,
+    )  # fmt: skip
+    if status == "nonsmooth":
+        # the fixed point of P^p ends: its return time jumps (a crossing of the section
+        # appears or vanishes: the orbit grazes dx1 = 0), within ds_min of the last point
+        bifs.append(("section-grazing", float(xs[-1][-1]), len(xs) - 1, xs[-1].copy()))
+    points = np.array([full(x) for x in xs])
+    T = np.empty(len(xs))
+    for i, x in enumerate(xs):
+        T[i] = periods.get(x.tobytes(), math.nan)
+        if not math.isfinite(T[i]):
+            _, _, times, _ = return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)
+            T[i] = times[-1]
+    stick_count = stick_time = None
+    if stick_events:
+        stick_count = np.full(len(xs), -1, dtype=np.int64)
+        stick_time = np.full(len(xs), np.nan)
+
+        def geometry(x, T_x):
+            d = stick_phases(system_at(x[-1]), full(x), T_x)
+            return d.size, float(d.sum())
+
+        for i, x in enumerate(xs):
+            if math.isfinite(T[i]):
+                try:
+                    stick_count[i], stick_time[i] = geometry(x, T[i])
+                except ValueError:  # the orbit could not be sampled: left as not computed
+                    pass
+        for i in range(len(xs) - 1):
+            a, b = stick_count[i], stick_count[i + 1]
+            if a >= 0 and b >= 0 and a != b:
+                loc = _locate_change(
+                    evaluate, xs[i], xs[i + 1], a,
+                    lambda x: geometry(x, periods.get(x.tobytes(), math.nan))[0],
+                    tol, 1e-8,
+                )  # fmt: skip
+                bifs.append(("stick-phase", float(loc[-1]), i, loc))
+        bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
+    return Branch(
+        system=system0,
+        param=param,
+        period=p,
+        values=xs[:, -1].copy(),
+        points=points,
+        T=T,
+        multipliers=mults,
+        stable=np.all(np.abs(mults) < 1.0, axis=1),
+        bifurcations=[Bifurcation(k, v, i, full(x)) for k, v, i, x in bifs],
+        status=status,
+        stick_count=stick_count,
+        stick_time=stick_time,
+    )

@@ -1,0 +1,174 @@
+"""Branch switching at a period-doubling: the doubled orbit's start, and its Newton solve."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .arclength import Evaluator, _correct
+from .branch import Bifurcation, Branch
+from .orbit_branch import _orbit_evaluator
+from .orbits import (
+    SECTION_INDEX,
+    Orbit,
+    find_orbit,
+    return_map,
+)
+
+# ------------------------------------------------------------ branch switching
+#: Offsets along the -1 eigenvector tried by :func:`switch_branch`, largest first: the
+#: doubled orbit's amplitude grows like sqrt(|lambda - lambda_PD|), and in the stiff
+#: friction layer the quadratic regime can be very narrow.
+SWITCH_DELTAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
+
+
+def period_doubling_start(
+    evaluate_double: Evaluator,
+    x_pd: np.ndarray,
+    v: np.ndarray,
+    delta: float,
+    *,
+    tol: float,
+    max_corrector: int = 8,
+) -> tuple[bool, np.ndarray]:
+    """A point of the period-doubled branch near a period-doubling point.
+
+    At a period-doubling point x_pd = (z*, lambda*) of a fixed point of P^p, with
+    D_z P^p v = -v, the branch of fixed points of P^2p that are not fixed points
+    of P^p crosses the p-branch, tangent to (v, 0): along it z = z* + delta v +
+    O(delta^2) and lambda - lambda* = O(delta^2). The predictor (z* + delta v,
+    lambda*) is corrected by Newton on G_2p(x) = 0 within the hyperplane
+    v . (z - z*) = delta (lambda free).
+
+    Parameters
+    ----------
+    evaluate_double : callable
+        The evaluator of P^2p (see :func:`pseudo_arclength`).
+    x_pd : ndarray, shape (m + 1,)
+        The period-doubling point (z*, lambda*).
+    v : ndarray, shape (m,)
+        An eigenvector of D_z P^p(z*) for the multiplier -1.
+    delta : float
+        Offset along v (v is normalised first).
+    tol : float
+        Corrector tolerance on max |G_2p|.
+    max_corrector : int
+        Most Newton iterations.
+
+    Returns
+    -------
+    ok, x
+        Whether the corrector converged, and the point (z, lambda). It may still
+        be a fixed point of P^p (for a delta too large): check that.
+    """
+    v = np.asarray(v, dtype=float)
+    w = np.r_[v / np.linalg.norm(v), 0.0]
+    x_pred = np.asarray(x_pd, dtype=float) + delta * w
+    ok, x, _, _ = _correct(evaluate_double, x_pred, w, x_pred, tol, max_corrector)
+    return bool(ok), x
+
+
+def switch_branch(
+    branch: Branch,
+    bifurcation: Bifurcation | int,
+    *,
+    deltas: tuple[float, ...] = SWITCH_DELTAS,
+    tol: float = 1e-10,
+    rtol: float = 1e-11,
+    atol: float = 1e-13,
+    fd_step: float = 1e-7,
+) -> Orbit:
+    """The period-doubled orbit born at a period-doubling point of an orbit branch.
+
+    Parameters
+    ----------
+    branch : Branch
+        A branch of period-p orbits (:func:`continue_orbit`).
+    bifurcation : Bifurcation or int
+        One of ``branch.bifurcations`` (or its index there), of kind
+        "period-doubling".
+    deltas : tuple of float
+        Offsets along the -1 eigenvector to try, in order (:func:`period_doubling_start`).
+        The first that gives a fixed point of P^2p that is not one of P^p wins.
+    tol, rtol, atol, fd_step
+        As for :func:`continue_orbit`.
+
+    Returns
+    -------
+    Orbit
+        Of period 2p, at a parameter value near the bifurcation's (``orbit.system``
+        holds it), polished by :func:`find_orbit`. Continue it away from the
+        bifurcation with ``continue_orbit(orbit, branch.param, bounds,
+        direction=np.sign(getattr(orbit.system, branch.param) - bifurcation.value))``.
+        If no offset works, the orbit is returned with ``converged = False``
+        and a ``message`` saying so.
+
+    Raises
+    ------
+    ValueError
+        For a branch of equilibria, a bifurcation that is not a period-doubling
+        of this branch, or non-positive deltas (naming the argument).
+    """
+    if not isinstance(branch, Branch) or branch.period < 1:
+        raise ValueError("branch must be a Branch of periodic orbits (continue_orbit)")
+    if isinstance(bifurcation, (int, np.integer)) and not isinstance(bifurcation, bool):
+        if not 0 <= bifurcation < len(branch.bifurcations):
+            raise ValueError(
+                f"bifurcation index {bifurcation} out of range: the branch has "
+                f"{len(branch.bifurcations)} bifurcations"
+            )
+        bifurcation = branch.bifurcations[int(bifurcation)]
+    if not isinstance(bifurcation, Bifurcation) or bifurcation.kind != "period-doubling":
+        kind = getattr(bifurcation, "kind", type(bifurcation).__name__)
+        raise ValueError(f"bifurcation must be a period-doubling of the branch, got {kind!r}")
+    if not deltas or not all(isinstance(d, (int, float)) and math.isfinite(d) and d > 0
+                             for d in deltas):  # fmt: skip
+        raise ValueError(f"deltas must be finite numbers > 0, got {deltas!r}")
+    p = branch.period
+    system0 = branch.system
+    n = system0.n_state
+    mask = np.arange(n) != SECTION_INDEX
+    lam_pd = float(bifurcation.value)
+    z_pd = np.asarray(bifurcation.point, dtype=float)
+    s_pd = dataclasses.replace(system0, **{branch.param: lam_pd})
+    st, _, _, jac = return_map(s_pd, z_pd, p, rtol=rtol, atol=atol)
+    if st != "ok":
+        raise ValueError(f"the return map fails at the bifurcation point: {st}")
+    mu, vecs = np.linalg.eig(jac)
+    k = int(np.argmin(np.abs(mu + 1.0)))
+    v = np.real(vecs[:, k])
+    evaluate2, full, system_at, _ = _orbit_evaluator(system0, branch.param, 2 * p, rtol, atol,
+                                                     fd_step)  # fmt: skip
+    x_pd = np.r_[z_pd[mask], lam_pd]
+    last = None
+    tried = []
+    for delta in deltas:
+        ok, x = period_doubling_start(evaluate2, x_pd, v, delta, tol=tol)
+        tried.append(delta)
+        if not ok:
+            continue
+        s = system_at(x[-1])
+        z = full(x)
+        st_p, pts_p, _, _ = return_map(s, z, p, tangents=False, rtol=rtol, atol=atol)
+        # a fixed point of P^p lies on the hyperplane too: the doubled orbit's P^p image is
+        # its other half, ~2 delta away
+        if st_p != "ok" or np.max(np.abs(pts_p[-1][mask] - z[mask])) < 0.5 * delta * np.max(
+            np.abs(v / np.linalg.norm(v))
+        ):
+            continue
+        last = find_orbit(s, z, 2 * p, tol=tol, rtol=rtol, atol=atol)
+        if last.converged:
+            return last
+    if last is None:
+        last = find_orbit(s_pd, z_pd, 2 * p, tol=tol, rtol=rtol, atol=atol, max_iter=0)
+    last.converged = False
+    last.stable = False
+    last.message = (
+        f"no period-{2 * p} orbit found along the -1 eigenvector (offsets tried: "
+        f"{', '.join(f'{d:g}' for d in tried)})"
+    )
+    if last.status == "converged":
+        last.status = "no-progress"
+    return last
