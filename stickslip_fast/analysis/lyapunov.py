@@ -43,8 +43,9 @@ from ..core.driver import (
     simple_stop,
     stop_now,
 )
-from ..core.problems import alloc_bordered_linear, make_tangent, tangent_variant
+from ..core.problems import alloc_bordered_linear
 from ..core.steppers import RODAS5P_METHOD, alloc_workspace
+from ..core.tangent import make_tangent, tangent_variant
 from ..core.trajectory import kernel_variant, variant_matches
 from ..model.params import N_PARAMS
 from ..model.system import System

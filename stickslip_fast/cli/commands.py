@@ -9,93 +9,32 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from ..core.trajectory import METHODS
-from ..model.system import DRIVES, PRESETS
-from .config import ConfigError, RunConfig, load_config, parse_config
+from .arguments import (  # noqa: F401
+    _add_common,
+    _check_writable,
+    _config_from_args,
+    _parse_value,
+)
+from .config import ConfigError
+from .continuation import (  # noqa: F401
+    _cmd_continue,
+    _equilibrium_from_config,
+    _orbit_from_config,
+    _switch_and_follow,
+)
+from .report import (  # noqa: F401
+    _census_report,
+    _report,
+    _sweep_report,
+    _trajectory_report,
+)
 
 __all__ = ["main"]
-
-
-def _parse_value(text: str) -> Any:
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    return text
-
-
-def _config_from_args(args: argparse.Namespace) -> RunConfig:
-    """A config file (if given) with the command-line overrides applied on top."""
-    data: dict[str, Any] = {}
-    if args.config:
-        base = load_config(args.config)
-        data = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.raw.items()}
-    system = data.setdefault("system", {})
-    if args.preset:
-        system.clear()
-        system["preset"] = args.preset
-    elif not args.config:
-        system["preset"] = "asymmetric"
-    for name in ("eta", "drive", "n_oscillators"):
-        value = getattr(args, name)
-        if value is not None:
-            system[name] = value
-    for item in args.set or []:
-        if "=" not in item:
-            raise ConfigError(f"--set expects KEY=VALUE, got {item!r}")
-        key, value = item.split("=", 1)
-        system[key.strip()] = _parse_value(value.strip())
-    integ = data.setdefault("integration", {})
-    for name in ("t_end", "t_transient", "method", "rtol", "atol", "h", "max_points"):
-        value = getattr(args, name, None)
-        if value is not None:
-            integ[name] = value
-    integ.setdefault("t_end", 3000.0)
-    integ.setdefault("t_transient", 2000.0 if integ["t_end"] > 2000.0 else 0.0)
-    if getattr(args, "sample_dt", None) is not None:
-        data.setdefault("simulate", {})["sample_dt"] = args.sample_dt
-    return parse_config(data, source=args.config or "<command line>")
-
-
-def _add_common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("config", nargs="?", help="TOML configuration file (see docs/configs.md)")
-    p.add_argument("--preset", choices=sorted(PRESETS), help="parameter set (default: asymmetric)")
-    p.add_argument("--eta", type=float, help="static/kinetic friction ratio eta in [1, 10]")
-    p.add_argument("--drive", choices=DRIVES)
-    p.add_argument("--n-oscillators", dest="n_oscillators", type=int)
-    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a System field")
-    p.add_argument("--t-end", dest="t_end", type=float)
-    p.add_argument("--t-transient", dest="t_transient", type=float)
-    p.add_argument("--method", choices=METHODS)
-    p.add_argument("--rtol", type=float)
-    p.add_argument("--atol", type=float)
-    p.add_argument("--h", type=float, help="fixed step (dopri5-fixed)")
-    p.add_argument("--max-points", dest="max_points", type=int)
-
-
-def _check_writable(path: str, what: str) -> None:
-    """Fail now, with one line naming the path, if ``path`` cannot be written later."""
-
-    from ..io import _make_parent
-
-    p = Path(path)
-    if p.is_dir():
-        raise IsADirectoryError(f"{what} {p} is a directory; give a file name")
-    if what == "--save":  # np.savez does not create folders
-        if not p.parent.is_dir():
-            raise FileNotFoundError(f"cannot write {what} {p}: no directory {p.parent}")
-    else:
-        _make_parent(p)
-    if not os.access(p.parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise PermissionError(f"cannot write {what} {p}: permission denied")
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -214,269 +153,6 @@ def _cmd_census(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(_census_report(args.output))
     return 0
-
-
-def _cmd_continue(args: argparse.Namespace) -> int:
-    from ..bifurcation.continuation import (
-        continue_equilibrium,
-        continue_orbit,
-        join_branches,
-        switch_branch,
-    )
-
-    cfg = _config_from_args(args)
-    if cfg.continuation is None:
-        raise ConfigError(
-            f"{cfg.source}: continuation needs a [continue] section with param and bounds"
-        )
-    _check_writable(args.output, "-o")
-    c = dict(cfg.continuation)
-    param, bounds = c.pop("param"), c.pop("bounds")
-    start = c.pop("start", "orbit")
-    direction = c.pop("direction", 1.0)
-    switch = c.pop("switch", False)
-    say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
-    if start == "orbit":
-        first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
-    else:
-        first, follow = _equilibrium_from_config(cfg, param, start, say), continue_equilibrium
-    say(f"continuing in {param} over {list(bounds)} ...")
-    if direction == "both":
-        branch = join_branches(follow(first, param, bounds, direction=-1.0, **c),
-                               follow(first, param, bounds, direction=1.0, **c))  # fmt: skip
-    else:
-        branch = follow(first, param, bounds, direction=direction, **c)
-    branch.to_hdf5(args.output)
-    if not args.quiet:
-        print(f"file:      {args.output}  (branch)")
-        print(branch.summary())
-    if switch:
-        _switch_and_follow(branch, bounds, c, args, say, switch_branch, continue_orbit)
-    return 0
-
-
-def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, continue_orbit):
-    """[continue].switch: from each period-doubling of ``branch``, the doubled orbit's
-    branch, continued away from it, into OUTPUT's stem + ``.pd<k>.h5``."""
-    out = Path(args.output)
-    pds = [b for b in branch.bifurcations if b.kind == "period-doubling"]
-    if not pds:
-        say("switch: the branch has no period-doubling")
-    for k, pd in enumerate(pds, start=1):
-        say(f"switching at the period-doubling at {branch.param} = {pd.value:.10g} ...")
-        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10))
-        if not orbit.converged:
-            print(f"period-doubling {k} at {pd.value:.10g}: {orbit.message}", file=sys.stderr)
-            continue
-        value = getattr(orbit.system, branch.param)
-        away = 1.0 if value >= pd.value else -1.0
-        doubled = continue_orbit(orbit, branch.param, bounds, direction=away, **settings)
-        path = out.with_name(f"{out.stem}.pd{k}{out.suffix or '.h5'}")
-        doubled.to_hdf5(path)
-        if not args.quiet:
-            print(f"file:      {path}  (period-{orbit.period} branch from the "
-                  f"period-doubling at {pd.value:.10g})")  # fmt: skip
-            print(doubled.summary())
-
-
-def _orbit_from_config(cfg: RunConfig, param: str, period, say):
-    """The orbit of the config's system: a simulation from [initial], then Newton."""
-    from ..analysis.simulate import simulate
-    from ..bifurcation.orbits import find_orbit
-
-    value = getattr(cfg.system, param)
-    say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
-    sim = simulate(cfg.system, y0=cfg.y0, **cfg.integration)
-    if sim.status != "ok" or sim.period < 1:
-        raise ValueError(
-            f"the simulation at {param} = {value:g} ended {sim.status!r} with period "
-            f"{sim.period}: no periodic orbit to continue; change [system].{param}, "
-            "[initial] or [integration].t_end"
-        )
-    orbit = find_orbit(cfg.system, sim, period)
-    if not orbit.converged:
-        raise ValueError(
-            f"Newton on the return map did not converge at {param} = {value:g} "
-            f"(status {orbit.status!r}: {orbit.message})"
-        )
-    lead = np.abs(orbit.multipliers).max() if orbit.multipliers.size else float("nan")
-    say(f"orbit: period {orbit.period}, T = {orbit.T:.10g}, residual {orbit.residual:.2g}, "
-        f"|leading multiplier| {lead:.4g}")  # fmt: skip
-    return orbit
-
-
-def _equilibrium_from_config(cfg: RunConfig, param: str, start: str, say):
-    """The config's system's rest point (``start`` "sliding" or "stall")."""
-    from ..bifurcation.orbits import find_equilibrium
-
-    eq = find_equilibrium(cfg.system, start)
-    if not eq.converged:
-        raise ValueError(
-            f"no {start} equilibrium found at {param} = {getattr(cfg.system, param):g} "
-            f"(residual {eq.residual:.2g}); change [system] or [continue].start"
-        )
-    say(f"equilibrium ({eq.kind}): stable {eq.stable}, leading eigenvalue "
-        f"{eq.eigenvalues[0]:.4g}")  # fmt: skip
-    return eq
-
-
-def _census_report(path) -> str:
-    """A text summary of a census file: configuration, progress, attractors per value."""
-    import h5py
-
-    from ..analysis.census import load_census
-    from ..core.poincare import STATUS_NAMES
-
-    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
-        attrs = dict(h5.attrs)
-    cfg = json.loads(attrs["config"])
-    res = load_census(path)
-    done = res.raw["done"].astype(bool)
-    lines = [f"file:      {path}  (census)"]
-    if attrs.get("title"):
-        lines.append(f"title:     {attrs['title']}")
-    lines.append(
-        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
-        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
-    )
-    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
-    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
-    v = res.values
-    lines.append(
-        f"census:    {res.param} in [{v.min():g}, {v.max():g}] ({v.size} values) x "
-        f"{len(res.starts)} starts, stop={cfg['stop']}"
-    )
-    st = cfg["settings"]
-    lines.append(
-        f"settings:  method={st['method']} rtol={st['rtol']:g} atol={st['atol']:g} "
-        f"t_end={st['t_end']:g} t_transient={st['t_transient']:g} max_points={st['max_points']}"
-    )
-    lines.append(
-        f"progress:  {int(done.sum())} of {done.size} runs done ({100 * done.mean():.1f}%)"
-    )
-    if done.any():
-        codes, counts = np.unique(res.status_code[done], return_counts=True)
-        lines.append(
-            "status:    " + ", ".join(f"{STATUS_NAMES[c]} {n}" for c, n in zip(codes, counts))
-        )
-        lines.append(f"tracks:    {len(res.tracks)} (classified from the runs done so far)"
-                     if not done.all() else f"tracks:    {len(res.tracks)}")  # fmt: skip
-        for t in res.tracks:
-            desc = t.kind if t.kind != "orbit" else f"orbit P{'/P'.join(map(str, t.periods))}"
-            frac = res.fractions()[t.birth : t.death + 1, t.id]
-            lines.append(
-                f"  #{t.id:<3d} {desc:<22s} {res.param} {v[t.birth]:g}..{v[t.death]:g}"
-                f"{'  born' if t.born else ''}{'  dies' if t.dies else ''}"
-                f"  basin {frac.min():.2f}-{frac.max():.2f}"
-            )
-    return "\n".join(lines)
-
-
-def _report(path, verify: bool = False) -> str:
-    """A text summary of a result file: configuration, progress, periods, statuses.
-
-    A trajectory file (``simulate -o``) gets its own summary. With ``verify``,
-    every chunk of a sweep file is read (checksums) and the swept values are
-    checked against their SHA-256; a damaged file raises
-    :class:`~stickslip_fast.io.ResultFileError` after the summary is printed.
-    """
-    from ..io import file_kind, open_h5, sweep_summary, verify_sweep, writer_alive
-
-    if file_kind(path) == "trajectory":
-        with open_h5(path) as h5:
-            return _trajectory_report(path, h5)
-    text, has_fletcher = _sweep_report(path, sweep_summary(path))
-    if not verify:
-        return text
-    if writer_alive(path):
-        return text + "\nintegrity: not checked (a sweep is writing this file now)"
-    problems, bad = verify_sweep(path)
-    if problems:
-        print(text)
-        from ..io import ResultFileError
-
-        raise ResultFileError(
-            f"{path} is corrupted: {'; '.join(problems)} ({int(bad.sum())} of {bad.size} "
-            "values affected). Run the same sweep again to recompute them."
-        )
-    checksums = "Fletcher-32 and SHA-256 verified" if has_fletcher else "SHA-256 verified"
-    return text + f"\nintegrity: ok (every chunk read; {checksums})"
-
-
-def _sweep_report(path, info: dict) -> tuple[str, bool]:
-    from ..core.poincare import STATUS_NAMES
-
-    cfg, attrs = info["config"], info["attrs"]
-    done, status, period = info["done"], info["status"], info["period"]
-    lines = [f"file:      {path}"]
-    if attrs.get("title"):
-        lines.append(f"title:     {attrs['title']}")
-    lines.append(
-        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
-        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
-    )
-    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
-    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
-    axes = [f"{n} in [{a.min():g}, {a.max():g}] ({a.size} values)" for n, a in info["axes"].items()]
-    lines.append("sweep:     " + " x ".join(axes) + f", mode {cfg['mode']}")
-    st = cfg["settings"]
-    lines.append(
-        f"settings:  method={st['method']} rtol={st['rtol']:g} atol={st['atol']:g} "
-        f"t_end={st['t_end']:g} t_transient={st['t_transient']:g} max_points={st['max_points']}"
-    )
-    lines.append(
-        f"progress:  {int(done.sum())} of {done.size} values done ({100 * done.mean():.1f}%)"
-    )
-    if done.any():
-        codes, counts = np.unique(status[done], return_counts=True)
-        lines.append(
-            "status:    "
-            + ", ".join(
-                f"{STATUS_NAMES[c] if 0 <= c < len(STATUS_NAMES) else f'code {c}'} {n}"
-                for c, n in zip(codes, counts)
-            )
-        )
-        ok = done & (status == 0)
-        if ok.any():
-            per, pc = np.unique(period[ok], return_counts=True)
-            hist = ", ".join(f"{'none' if p == 0 else f'P{p}'}: {n}" for p, n in zip(per, pc))
-            lines.append(f"periods:   {hist}")
-    return "\n".join(lines), bool(info.get("fletcher32"))
-
-
-def _trajectory_report(path, h5) -> str:
-    """The summary of a single-run file written by ``simulate -o``."""
-    a = h5.attrs
-    cfg = json.loads(a["config"])
-    st = cfg.get("settings", {})
-    lines = [f"file:      {path} (single run, simulate -o)"]
-    if a.get("title"):
-        lines.append(f"title:     {a['title']}")
-    lines.append(
-        f"package:   stickslip_fast {a.get('package_version', '?')}, "
-        f"schema {a.get('schema_version')}, created {a.get('created', '?')}"
-    )
-    sysd = {k: v for k, v in cfg.get("system", {}).items() if v is not None}
-    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
-    if st:
-        lines.append(
-            f"settings:  method={a.get('method', st.get('method'))} rtol={st['rtol']:g} "
-            f"atol={st['atol']:g} t_end={st['t_end']:g} t_transient={st['t_transient']:g}"
-        )
-    period = int(a["period"])
-    lines.append(
-        f"result:    status {a['status']}, period {period if period else 'none detected'}, "
-        f"{int(a['n_steps'])} steps ({int(a['n_rejected'])} rejected), "
-        f"{int(a['n_crossings'])} Poincare crossings"
-    )
-    n_t = h5["t"].shape[0]
-    sample = cfg.get("sample_dt")
-    lines.append(
-        f"data:      {h5['poincare'].shape[0]} Poincare points, {n_t} samples"
-        + (f" every {sample:g}" if n_t and sample else "")
-        + f"; state {', '.join(s.decode() if isinstance(s, bytes) else str(s) for s in h5['state'][...])}"
-    )
-    return "\n".join(lines)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:

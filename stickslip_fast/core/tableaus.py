@@ -148,10 +148,18 @@ All arrays are C-contiguous ``float64`` and flagged read-only.
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
-import numpy as np
-from numpy.typing import NDArray
+from .tableau_types import (  # noqa: F401
+    ExplicitRKTableau,
+    FloatArray,
+    RosenbrockTableau,
+    _frozen,
+)
+from .tableaus_rodas4 import (  # noqa: F401
+    _RODAS4P2_A4,
+    _RODAS4P_A4,
+    RODAS4P,
+    RODAS4P2,
+)
 
 __all__ = [
     "ExplicitRKTableau",
@@ -162,136 +170,13 @@ __all__ = [
     "RODAS4P2",
 ]
 
-FloatArray = NDArray[np.float64]
-
-
-def _frozen(values: object) -> FloatArray:
-    """Return ``values`` as a read-only, C-contiguous ``float64`` array.
-
-    Parameters
-    ----------
-    values : array_like
-        Nested sequence of numbers.
-
-    Returns
-    -------
-    numpy.ndarray
-        A fresh array with ``flags.writeable == False``.
-    """
-    arr = np.ascontiguousarray(np.array(values, dtype=np.float64))
-    arr.flags.writeable = False
-    return arr
-
-
-class ExplicitRKTableau(NamedTuple):
-    """Embedded explicit Runge-Kutta pair with polynomial dense output.
-
-    Attributes
-    ----------
-    c : ndarray, shape (s,)
-        Stage abscissae (row sums of ``A``).
-    A : ndarray, shape (s, s)
-        Strictly lower-triangular stage matrix.
-    b : ndarray, shape (s,)
-        Weights of the propagated (higher-order) solution.
-    b_err : ndarray, shape (s,)
-        ``b - b_hat``; the local error estimate is ``h * b_err @ k``.
-    dense : ndarray, shape (s, n_poly)
-        Dense-output matrix ``P``:
-        ``y(t0 + theta h) = y0 + h * sum_i k_i * sum_m P[i, m] * theta**(m+1)``.
-    order : int
-        Order of the solution built with ``b``.
-    embedded_order : int
-        Order of the embedded solution built with ``b - b_err``.
-    dense_order : int
-        Order of the continuous extension.
-    fsal : bool
-        True if the last row of ``A`` equals ``b`` (first same as last).
-    """
-
-    c: FloatArray
-    A: FloatArray
-    b: FloatArray
-    b_err: FloatArray
-    dense: FloatArray
-    order: int = 5
-    embedded_order: int = 4
-    dense_order: int = 4
-    fsal: bool = True
-
-    @property
-    def n_stages(self) -> int:
-        """Number of stages ``s``."""
-        return int(self.b.shape[0])
-
-
-class RosenbrockTableau(NamedTuple):
-    """Rosenbrock-Wanner method in transformed (Rodas) form.
-
-    See the module docstring for the exact step and interpolation formulas.
-
-    Attributes
-    ----------
-    gamma : float
-        Diagonal coefficient; the iteration matrix is ``I/(h*gamma) - J``.
-    a : ndarray, shape (s, s)
-        Strictly lower-triangular stage-argument coefficients
-        (``u_i = y0 + sum_{j<i} a[i, j] k_j``).
-    C : ndarray, shape (s, s)
-        Strictly lower-triangular coupling coefficients
-        (right-hand side ``f(u_i) + sum_{j<i} C[i, j]/h k_j``).
-    c : ndarray, shape (s,)
-        Stage times (``t0 + c[i] h``); unused for autonomous problems.
-    d : ndarray, shape (s,)
-        Coefficients of ``h * df/dt``; unused for autonomous problems.
-    H : ndarray, shape (n_dense, s)
-        Dense-output coefficients, ``h_r = sum_j H[r, j] k_j``.
-    order : int
-        Order of ``y1``.
-    embedded_order : int
-        Order of the embedded solution ``y1 - k[s-1]``.
-    dense_order : int
-        Order of the dense output.
-    """
-
-    gamma: float
-    a: FloatArray
-    C: FloatArray
-    c: FloatArray
-    d: FloatArray
-    H: FloatArray
-    order: int = 5
-    embedded_order: int = 4
-    dense_order: int = 4
-
-    @property
-    def n_stages(self) -> int:
-        """Number of stages ``s``."""
-        return int(self.a.shape[0])
-
-    @property
-    def b(self) -> FloatArray:
-        """Solution weights: ``y1 = y0 + sum_j b[j] k_j`` (stiffly accurate form).
-
-        The last stage's argument plus its increment: ``b = a[s-1] + e_{s-1}``.
-        """
-        w = self.a[-1].copy()
-        w[-1] += 1.0
-        return w
-
-    @property
-    def b_err(self) -> FloatArray:
-        """Error weights: ``err = sum_j b_err[j] k_j = k_{s-1}`` (y1 minus the embedded solution)."""
-        w = np.zeros(self.a.shape[0])
-        w[-1] = 1.0
-        return w
-
 
 # ---------------------------------------------------------------------------
 # Dormand-Prince 5(4)
 # ---------------------------------------------------------------------------
 
 _DOPRI5_B = [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0]
+
 
 # b_hat (embedded 4th order): 5179/57600, 0, 7571/16695, 393/640,
 # -92097/339200, 187/2100, 1/40.  Stored here as b - b_hat, exactly reduced.
@@ -304,6 +189,7 @@ _DOPRI5_B_ERR = [
     22 / 525,
     -1 / 40,
 ]
+
 
 DOPRI5 = ExplicitRKTableau(
     c=_frozen([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0]),
@@ -367,6 +253,8 @@ DOPRI5 = ExplicitRKTableau(
     dense_order=4,
     fsal=True,
 )
+
+
 """Dormand-Prince 5(4) pair with Shampine's 4th-order dense output."""
 
 
@@ -381,6 +269,7 @@ _RODAS5P_A6 = [
     -0.18268767659942256,
     0.030198172008377946,
 ]
+
 
 RODAS5P = RosenbrockTableau(
     gamma=0.21193756319429014,
@@ -533,134 +422,12 @@ RODAS5P = RosenbrockTableau(
     embedded_order=4,
     dense_order=4,
 )
+
+
 """Rodas5P (Steinebach 2023) in OrdinaryDiffEq.jl's transformed form."""
 
 
-# ---------------------------------------------------------------------------
-# Rodas4P (Steinebach 1995) and Rodas4P2 (Steinebach 2020), transformed form
-# ---------------------------------------------------------------------------
-
-_RODAS4P_A4 = [-7.170454962423024, -4.741636671481785, -16.31002631330971, -1.062004044111401]
-
-RODAS4P = RosenbrockTableau(
-    gamma=0.25,
-    a=_frozen(
-        [
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [3.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [1.831036793486759, 0.4955183967433795, 0.0, 0.0, 0.0, 0.0],
-            [2.304376582692669, -0.05249275245743001, -1.176798761832782, 0.0, 0.0, 0.0],
-            [*_RODAS4P_A4, 0.0, 0.0],
-            [*_RODAS4P_A4, 1.0, 0.0],
-        ]
-    ),
-    C=_frozen(
-        [
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [-12.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [-8.791795173947035, -2.207865586973518, 0.0, 0.0, 0.0, 0.0],
-            [10.81793056857153, 6.780270611428266, 19.53485944642410, 0.0, 0.0, 0.0],
-            [
-                34.19095006749676,
-                15.49671153725963,
-                54.74760875964130,
-                14.16005392148534,
-                0.0,
-                0.0,
-            ],
-            [
-                34.62605830930532,
-                15.30084976114473,
-                56.99955578662667,
-                18.40807009793095,
-                -5.714285714285717,
-                0.0,
-            ],
-        ]
-    ),
-    c=_frozen([0.0, 0.75, 0.21, 0.63, 1.0, 1.0]),
-    d=_frozen([0.25, -0.5, -0.023504, -0.0362, 0.0, 0.0]),
-    H=_frozen(
-        [
-            [25.09876703708589, 11.62013104361867, 28.49148307714626, -5.664021568594133, 0.0, 0.0],
-            [
-                1.638054557396973,
-                -0.7373619806678748,
-                8.477918219238990,
-                15.99253148779520,
-                -1.882352941176471,
-                0.0,
-            ],
-        ]
-    ),
-    order=4,
-    embedded_order=3,
-    dense_order=3,
-)
 """Rodas4P (Steinebach 1995) in OrdinaryDiffEq.jl's transformed form."""
 
-_RODAS4P2_A4 = [7.089566927282776, 4.573591406461604, -8.423496976860259, -0.959280113459775]
 
-RODAS4P2 = RosenbrockTableau(
-    gamma=0.25,
-    a=_frozen(
-        [
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [3.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [0.906377755268814, -0.189707390391685, 0.0, 0.0, 0.0, 0.0],
-            [3.758617027739064, 1.161741776019525, -0.849258085312803, 0.0, 0.0, 0.0],
-            [*_RODAS4P2_A4, 0.0, 0.0],
-            [*_RODAS4P2_A4, 1.0, 0.0],
-        ]
-    ),
-    C=_frozen(
-        [
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [-12.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [-6.354581592719008, 0.338972550544623, 0.0, 0.0, 0.0, 0.0],
-            [-8.575016317114033, -7.606483992117508, 12.224997650124820, 0.0, 0.0, 0.0],
-            [
-                -5.888975457523102,
-                -8.157396617841821,
-                24.805546872612922,
-                12.790401512796979,
-                0.0,
-                0.0,
-            ],
-            [
-                -4.408651676063871,
-                -6.692003137674639,
-                24.625568527593117,
-                16.627521966636085,
-                -5.714285714285718,
-                0.0,
-            ],
-        ]
-    ),
-    c=_frozen([0.0, 0.75, 0.321448134013046, 0.519745732277726, 1.0, 1.0]),
-    d=_frozen([0.25, -0.5, -0.189532918363016, 0.085612108792769, 0.0, 0.0]),
-    H=_frozen(
-        [
-            [
-                -5.323528268423303,
-                -10.042123754867493,
-                17.175254928256965,
-                -5.079931171878093,
-                -0.016185991706112,
-                0.0,
-            ],
-            [
-                6.984505741529879,
-                6.914061169603662,
-                -0.849178943070653,
-                18.104410789349338,
-                -3.516963011559032,
-                0.0,
-            ],
-        ]
-    ),
-    order=4,
-    embedded_order=3,
-    dense_order=3,
-)
 """Rodas4P2 (Steinebach 2020) in OrdinaryDiffEq.jl's transformed form."""

@@ -26,8 +26,9 @@ from .driver import (
     drive,
     simple_stop,
 )
-from .problems import alloc_bordered_linear, make_sensitivity, make_tangent, tangent_variant
+from .problems import alloc_bordered_linear
 from .steppers import RODAS5P_METHOD, alloc_workspace
+from .tangent import make_sensitivity, make_tangent, tangent_variant
 from .trajectory import X1_MINIMA, variant_matches
 
 __all__ = ["propagate_tangents", "propagate_sensitivity"]

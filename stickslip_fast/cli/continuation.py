@@ -1,0 +1,117 @@
+"""``stickslip-fast continue``: a branch from a config's orbit or equilibrium, and the branches
+switched to at its period-doublings."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .arguments import _check_writable, _config_from_args
+from .config import ConfigError, RunConfig
+
+
+def _cmd_continue(args: argparse.Namespace) -> int:
+    from ..bifurcation.continuation import (
+        continue_equilibrium,
+        continue_orbit,
+        join_branches,
+        switch_branch,
+    )
+
+    cfg = _config_from_args(args)
+    if cfg.continuation is None:
+        raise ConfigError(
+            f"{cfg.source}: continuation needs a [continue] section with param and bounds"
+        )
+    _check_writable(args.output, "-o")
+    c = dict(cfg.continuation)
+    param, bounds = c.pop("param"), c.pop("bounds")
+    start = c.pop("start", "orbit")
+    direction = c.pop("direction", 1.0)
+    switch = c.pop("switch", False)
+    say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    if start == "orbit":
+        first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
+    else:
+        first, follow = _equilibrium_from_config(cfg, param, start, say), continue_equilibrium
+    say(f"continuing in {param} over {list(bounds)} ...")
+    if direction == "both":
+        branch = join_branches(follow(first, param, bounds, direction=-1.0, **c),
+                               follow(first, param, bounds, direction=1.0, **c))  # fmt: skip
+    else:
+        branch = follow(first, param, bounds, direction=direction, **c)
+    branch.to_hdf5(args.output)
+    if not args.quiet:
+        print(f"file:      {args.output}  (branch)")
+        print(branch.summary())
+    if switch:
+        _switch_and_follow(branch, bounds, c, args, say, switch_branch, continue_orbit)
+    return 0
+
+
+def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, continue_orbit):
+    """[continue].switch: from each period-doubling of ``branch``, the doubled orbit's
+    branch, continued away from it, into OUTPUT's stem + ``.pd<k>.h5``."""
+    out = Path(args.output)
+    pds = [b for b in branch.bifurcations if b.kind == "period-doubling"]
+    if not pds:
+        say("switch: the branch has no period-doubling")
+    for k, pd in enumerate(pds, start=1):
+        say(f"switching at the period-doubling at {branch.param} = {pd.value:.10g} ...")
+        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10))
+        if not orbit.converged:
+            print(f"period-doubling {k} at {pd.value:.10g}: {orbit.message}", file=sys.stderr)
+            continue
+        value = getattr(orbit.system, branch.param)
+        away = 1.0 if value >= pd.value else -1.0
+        doubled = continue_orbit(orbit, branch.param, bounds, direction=away, **settings)
+        path = out.with_name(f"{out.stem}.pd{k}{out.suffix or '.h5'}")
+        doubled.to_hdf5(path)
+        if not args.quiet:
+            print(f"file:      {path}  (period-{orbit.period} branch from the "
+                  f"period-doubling at {pd.value:.10g})")  # fmt: skip
+            print(doubled.summary())
+
+
+def _orbit_from_config(cfg: RunConfig, param: str, period, say):
+    """The orbit of the config's system: a simulation from [initial], then Newton."""
+    from ..analysis.simulate import simulate
+    from ..bifurcation.orbits import find_orbit
+
+    value = getattr(cfg.system, param)
+    say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
+    sim = simulate(cfg.system, y0=cfg.y0, **cfg.integration)
+    if sim.status != "ok" or sim.period < 1:
+        raise ValueError(
+            f"the simulation at {param} = {value:g} ended {sim.status!r} with period "
+            f"{sim.period}: no periodic orbit to continue; change [system].{param}, "
+            "[initial] or [integration].t_end"
+        )
+    orbit = find_orbit(cfg.system, sim, period)
+    if not orbit.converged:
+        raise ValueError(
+            f"Newton on the return map did not converge at {param} = {value:g} "
+            f"(status {orbit.status!r}: {orbit.message})"
+        )
+    lead = np.abs(orbit.multipliers).max() if orbit.multipliers.size else float("nan")
+    say(f"orbit: period {orbit.period}, T = {orbit.T:.10g}, residual {orbit.residual:.2g}, "
+        f"|leading multiplier| {lead:.4g}")  # fmt: skip
+    return orbit
+
+
+def _equilibrium_from_config(cfg: RunConfig, param: str, start: str, say):
+    """The config's system's rest point (``start`` "sliding" or "stall")."""
+    from ..bifurcation.orbits import find_equilibrium
+
+    eq = find_equilibrium(cfg.system, start)
+    if not eq.converged:
+        raise ValueError(
+            f"no {start} equilibrium found at {param} = {getattr(cfg.system, param):g} "
+            f"(residual {eq.residual:.2g}); change [system] or [continue].start"
+        )
+    say(f"equilibrium ({eq.kind}): stable {eq.stable}, leading eigenvalue "
+        f"{eq.eigenvalues[0]:.4g}")  # fmt: skip
+    return eq
