@@ -141,7 +141,7 @@ def test_tasks_do_not_compile_and_use_one_numba_thread(cluster):
           mode="continuation-both", **KW)  # fmt: skip
 
     def overloads():
-        from stickslip_fast.core.trajectory import continuation_chunk, sweep_chunk
+        from stickslip_fast.core.sweep_kernels import continuation_chunk, sweep_chunk
 
         return {
             "sweep_chunk": len(sweep_chunk.overloads),

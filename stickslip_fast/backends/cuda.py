@@ -34,14 +34,13 @@ from numba import njit
 
 from ..model.params import P_ETA, P_ETAP, eta_prime
 
-# cuda_kernels raises the ImportError that names the [cuda] extra before numba.cuda is used
+# cuda_device raises the ImportError that names the [cuda] extra before numba.cuda is used
+from .cuda_device import float64, int64, types
 from .cuda_kernels import (
     MAX_OSCILLATORS,
     check_available,
-    compile_ptx,
     cuda,
     get_kernel,
-    kernel_signature,
     simulator_enabled,
 )
 
@@ -328,3 +327,46 @@ def device_summary() -> dict:
         "simulator": False,
         "env_cudasim": os.environ.get("NUMBA_ENABLE_CUDASIM", ""),
     }
+
+
+def kernel_signature():
+    """The argument types of the sweep kernels (as launched by the backend)."""
+    a1, a2, a3, i2 = float64[::1], float64[:, ::1], float64[:, :, ::1], int64[:, ::1]
+    f, i = float64, int64
+    b = types.boolean
+    return (a2, a2, f, f, f, f, f, i, f, f, i, b, f, a3, a2, i2, a1, a2)
+
+
+def compile_ptx(n_osc: int, dc: bool, cc: tuple[int, int] = (9, 0)) -> str:
+    """PTX of a sweep kernel for compute capability ``cc``, compiled without a GPU.
+
+    Needs NVVM (``pip install "stickslip_fast[cuda]"`` brings it) but no driver:
+    it checks that the kernels, and the model functions they call, compile for
+    the real CUDA target, which the simulator cannot. numba-cuda asks the
+    current device for its compute capability when it compiles a called
+    function; that question is answered with ``cc`` for the duration.
+
+    Parameters
+    ----------
+    n_osc, dc : int, bool
+        As for :func:`get_kernel`.
+    cc : (int, int)
+        Target compute capability (default 9.0, Hopper).
+
+    Returns
+    -------
+    str
+        The PTX text (feed it to ``ptxas -v`` for registers per thread).
+    """
+    if simulator_enabled():
+        raise RuntimeError("compile_ptx needs the real CUDA target, not NUMBA_ENABLE_CUDASIM=1")
+    import types as _types
+    from unittest import mock
+
+    from numba.cuda import dispatcher
+
+    kernel = get_kernel(n_osc, dc)
+    fake = _types.SimpleNamespace(compute_capability=tuple(cc))
+    with mock.patch.object(dispatcher, "get_current_device", lambda: fake):
+        ptx, _ = cuda.compile_ptx(kernel.py_func, kernel_signature(), cc=tuple(cc))
+    return ptx

@@ -37,247 +37,94 @@ operation for operation; the tests compare the two value by value.
 
 from __future__ import annotations
 
-import logging
 import math
 
 import numpy as np
 
-try:
-    import numba_cuda  # noqa: F401  (the [cuda] extra; the built-in numba.cuda is deprecated)
-except ImportError as exc:  # pragma: no cover - exercised only without the extra
-    raise ImportError(
-        'backend="cuda" needs numba-cuda: pip install "stickslip_fast[cuda]"'
-    ) from exc
-
-from numba import cuda, float64, int64, types
-
-from ..base.status import STATUS_NAMES
-from ..core import poincare
 from ..core.steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
 from ..core.tableaus import RODAS5P
 from ..core.trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
-from ..model import equations as model
-from ..model import linalg
 from ..model.params import P_VB0
-
-# numba-cuda <= 0.30.4 registers an overload for np.row_stack when it compiles
-# its first kernel, and NumPy 2.5 removed that alias: the compile then fails with
-# AttributeError (seen on an H200 image with numpy 2.5.2). Restore the alias.
-if not hasattr(np, "row_stack"):  # noqa: NPY201
-    setattr(np, "row_stack", np.vstack)  # noqa: B010
-
-
-class _NotReadyFilter(logging.Filter):
-    """numba logs every cuEventQuery that answers "not ready yet" at ERROR level;
-    polling launches for completion asks exactly that, so those records are dropped."""
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        return "CUDA_ERROR_NOT_READY" not in record.getMessage()
-
-
-logging.getLogger("numba.cuda.cudadrv.driver").addFilter(_NotReadyFilter())
+from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
+    _ST_ERROR,
+    _ST_MAX_STEPS,
+    _ST_NONFINITE,
+    _ST_OK,
+    _ST_UNDERFLOW,
+    _dense_value,
+    _error_norm,
+    _initial_step,
+    _locate_upcrossing,
+    _reverse_rows,
+    check_available,
+    classify,
+    cuda,
+    detect_period,
+    float64,
+    int64,
+    jacobian_blocks,
+    motion_measure,
+    rhs,
+    ring_period,
+    simulator_enabled,
+    w_factor,
+    w_solve,
+)
 
 __all__ = [
     "MAX_OSCILLATORS",
     "check_available",
-    "compile_ptx",
     "get_kernel",
-    "kernel_signature",
     "simulator_enabled",
 ]
+
 
 #: Largest chain the kernels are specialised for; larger N runs on the CPU.
 MAX_OSCILLATORS = 4
 
-_ST_OK = STATUS_NAMES.index("ok")
-_ST_NONFINITE = STATUS_NAMES.index("nonfinite")
-_ST_UNDERFLOW = STATUS_NAMES.index("step-underflow")
-_ST_MAX_STEPS = STATUS_NAMES.index("max-steps")
-_ST_ERROR = STATUS_NAMES.index("error")
 
 # Rodas5P as data: numba freezes module-level arrays into the kernel as constants.
 _GAMMA = float(RODAS5P.gamma)
+
+
 _A = np.ascontiguousarray(RODAS5P.a, dtype=np.float64)
+
+
 _C = np.ascontiguousarray(RODAS5P.C, dtype=np.float64)
+
+
 _B = np.ascontiguousarray(RODAS5P.b, dtype=np.float64)
+
+
 _E = np.ascontiguousarray(RODAS5P.b_err, dtype=np.float64)
+
+
 _H = np.ascontiguousarray(RODAS5P.H, dtype=np.float64)
+
+
 _Q = RODAS5P.embedded_order + 1.0
+
+
 _STAGES = int(_B.size)
+
+
 _NDENSE = int(_H.shape[0])
+
 
 # PI step-size controller: the CPU kernel's constants
 _SAFETY = STEP_SAFETY
+
+
 _FAC_MIN = STEP_FAC_MIN
+
+
 _FAC_MAX = STEP_FAC_MAX
+
+
 _PI_ALPHA = PI_ALPHA
+
+
 _PI_BETA = PI_BETA
-
-
-def simulator_enabled() -> bool:
-    """True when numba runs CUDA kernels in its Python simulator (NUMBA_ENABLE_CUDASIM=1).
-
-    Decided by which ``numba.cuda`` was imported (the variable is read once, at
-    that import), not by the environment now.
-    """
-    return cuda.jit.__module__.startswith("numba.cuda.simulator")
-
-
-def check_available() -> None:
-    """Raise a RuntimeError that says so when there is no usable GPU (nor the simulator)."""
-    if simulator_enabled():
-        return
-    if not cuda.is_available():
-        raise RuntimeError(
-            'backend="cuda" needs an NVIDIA GPU with a working driver, and none was found '
-            "(numba.cuda.is_available() is False). Use backend='local', or set "
-            "NUMBA_ENABLE_CUDASIM=1 before starting Python to run the CUDA kernels in "
-            "numba's (slow) simulator for testing."
-        )
-
-
-def _device_callable(func):
-    """A CPU ``@njit`` function as the kernels call it.
-
-    On a GPU that is the dispatcher itself: numba-cuda compiles it into a
-    device function from the same source. Numba's simulator instead runs the
-    kernel as Python and calls the CPU-compiled function, which cannot take the
-    simulator's array wrappers, so these are unwrapped first.
-    """
-    if not simulator_enabled():
-        return func
-    from numba.cuda.simulator.cudadrv.devicearray import (
-        FakeCUDAArray,
-        FakeWithinKernelCUDAArray,
-    )
-
-    def unwrap(a):
-        if isinstance(a, FakeWithinKernelCUDAArray):
-            a = a.__dict__["_item"]
-        if isinstance(a, FakeCUDAArray):
-            a = a._ary
-        return a
-
-    def call(*args):
-        return func(*[unwrap(a) for a in args])
-
-    call.__name__ = func.__name__
-    return call
-
-
-# the model's one source of the equations, and the CPU kernel's classification
-rhs = _device_callable(model.rhs)
-jacobian_blocks = _device_callable(model.jacobian_blocks)
-motion_measure = _device_callable(poincare.motion_measure)
-classify = _device_callable(poincare.classify)
-detect_period = _device_callable(poincare.detect_period)
-ring_period = _device_callable(poincare.ring_period)
-# the bordered O(N) factorisation and solve of W = sigma I - J
-w_factor = _device_callable(linalg.w_factor)
-w_solve = _device_callable(linalg.w_solve)
-
-
-# ------------------------------------------------------------ device helpers
-@cuda.jit(device=True)
-def _error_norm(err, y0, y1, rtol, atol):
-    n = err.size
-    acc = 0.0
-    for i in range(n):
-        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
-        e = err[i] / sc
-        acc += e * e
-    return math.sqrt(acc / n)
-
-
-@cuda.jit(device=True)
-def _initial_step(y0, f0, p, n_osc, dc, rtol, atol, order, work, fwork):
-    n = y0.size
-    d0 = 0.0
-    d1 = 0.0
-    for i in range(n):
-        sc = atol + rtol * abs(y0[i])
-        d0 += (y0[i] / sc) ** 2
-        d1 += (f0[i] / sc) ** 2
-    d0 = math.sqrt(d0 / n)
-    d1 = math.sqrt(d1 / n)
-    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-    for i in range(n):
-        work[i] = y0[i] + h0 * f0[i]
-    rhs(work, p, n_osc, dc, fwork)
-    d2 = 0.0
-    for i in range(n):
-        sc = atol + rtol * abs(y0[i])
-        d2 += ((fwork[i] - f0[i]) / sc) ** 2
-    d2 = math.sqrt(d2 / n) / h0
-    big = max(d1, d2)
-    if big <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / big) ** (1.0 / (order + 1.0))
-    return min(100.0 * h0, h1)
-
-
-@cuda.jit(device=True)
-def _dense_value(theta, y0, y1, D, i):
-    """Rodas5P's Hermite-form dense output, component i at theta in [0, 1]."""
-    inner = 0.0
-    for r in range(D.shape[0] - 1, -1, -1):
-        inner = D[r, i] + theta * inner
-    th1 = 1.0 - theta
-    return th1 * y0[i] + theta * (y1[i] + th1 * inner)
-
-
-@cuda.jit(device=True)
-def _locate_upcrossing(y0, y1, D, comp):
-    """theta where component ``comp`` of the dense output crosses 0 upwards (Illinois)."""
-    a = 0.0
-    fa = y0[comp]
-    b = 1.0
-    fb = y1[comp]
-    if fb == 0.0:
-        return 1.0
-    side = 0
-    theta = 1.0
-    for _ in range(200):
-        theta = (a * fb - b * fa) / (fb - fa)
-        if not (a < theta < b):
-            theta = 0.5 * (a + b)
-            if not (a < theta < b):
-                break
-        f = _dense_value(theta, y0, y1, D, comp)
-        if f == 0.0:
-            return theta
-        if f < 0.0:
-            a = theta
-            fa = f
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = theta
-            fb = f
-            if side == 1:
-                fa *= 0.5
-            side = 1
-        if b - a <= 4e-16:
-            break
-    return theta
-
-
-@cuda.jit(device=True)
-def _reverse_rows(pts, tpts, lo, hi):
-    """Reverse rows lo .. hi-1 of pts and tpts in place."""
-    hi -= 1
-    while lo < hi:
-        for i in range(pts.shape[1]):
-            tmp = pts[lo, i]
-            pts[lo, i] = pts[hi, i]
-            pts[hi, i] = tmp
-        tt = tpts[lo]
-        tpts[lo] = tpts[hi]
-        tpts[hi] = tt
-        lo += 1
-        hi -= 1
 
 
 # ------------------------------------------------------------------- kernels
@@ -624,46 +471,3 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
         ints[v, 5] = n_cross
 
     return sweep_kernel
-
-
-def kernel_signature():
-    """The argument types of the sweep kernels (as launched by the backend)."""
-    a1, a2, a3, i2 = float64[::1], float64[:, ::1], float64[:, :, ::1], int64[:, ::1]
-    f, i = float64, int64
-    b = types.boolean
-    return (a2, a2, f, f, f, f, f, i, f, f, i, b, f, a3, a2, i2, a1, a2)
-
-
-def compile_ptx(n_osc: int, dc: bool, cc: tuple[int, int] = (9, 0)) -> str:
-    """PTX of a sweep kernel for compute capability ``cc``, compiled without a GPU.
-
-    Needs NVVM (``pip install "stickslip_fast[cuda]"`` brings it) but no driver:
-    it checks that the kernels, and the model functions they call, compile for
-    the real CUDA target, which the simulator cannot. numba-cuda asks the
-    current device for its compute capability when it compiles a called
-    function; that question is answered with ``cc`` for the duration.
-
-    Parameters
-    ----------
-    n_osc, dc : int, bool
-        As for :func:`get_kernel`.
-    cc : (int, int)
-        Target compute capability (default 9.0, Hopper).
-
-    Returns
-    -------
-    str
-        The PTX text (feed it to ``ptxas -v`` for registers per thread).
-    """
-    if simulator_enabled():
-        raise RuntimeError("compile_ptx needs the real CUDA target, not NUMBA_ENABLE_CUDASIM=1")
-    import types as _types
-    from unittest import mock
-
-    from numba.cuda import dispatcher
-
-    kernel = get_kernel(n_osc, dc)
-    fake = _types.SimpleNamespace(compute_capability=tuple(cc))
-    with mock.patch.object(dispatcher, "get_current_device", lambda: fake):
-        ptx, _ = cuda.compile_ptx(kernel.py_func, kernel_signature(), cc=tuple(cc))
-    return ptx

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..base.cache_guard import fingerprint
 from ..core.settings import Settings
-from ..core.trajectory import continuation_chunk, sweep_chunk
+from ..core.sweep_kernels import continuation_chunk, sweep_chunk
 from ..model.system import System
 from .local import compute_continuation_chunk, compute_restart_chunk
 

@@ -22,14 +22,8 @@ from ..base.interrupt import call_interruptible, new_abort_flag
 from ..base.status import ST_NOT_COMPUTED
 from ..core.poincare import MAX_PERIOD
 from ..core.settings import STOP_KINDS, Settings
-from ..core.trajectory import (
-    METHODS,
-    SWEEP_INT_FIELDS,
-    continuation_chunk,
-    kernel_variant,
-    run_settings,
-    sweep_chunk,
-)
+from ..core.sweep_kernels import continuation_chunk, sweep_chunk
+from ..core.trajectory import METHODS, SWEEP_INT_FIELDS, kernel_variant, run_settings
 from ..model.system import PARAM_INDEX, System
 
 __all__ = [
