@@ -124,7 +124,7 @@ def test_lyapunov_damped_linear_oscillator():
     [("asymmetric", 9.99, 2), ("symmetric", 5.0, 1)],
 )
 def test_lyapunov_periodic_stick_slip_orbit_is_zero(preset, eta, period):
-    from stickslip_fast.analysis import simulate
+    from stickslip_fast import simulate
 
     system = System.preset(preset, eta=eta)
     res = largest_lyapunov(system, 12000.0, 2000.0)
