@@ -280,10 +280,73 @@ def census(
     ValueError
         For bad input, naming the argument.
     """
-    from ..backends.local import run_local
     from ..base.version import package_version
     from .sweep import _numba_threads
 
+    vals = _check_census_args(
+        system, param, values, stop, backend, scheduler, n_workers, track_threshold, identity_tol
+    )
+    start_arr, box_arr = _check_starts(
+        system, n_starts, box, starts, seed, include_zero, param, vals
+    )
+    settings = Settings.resolve(
+        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,
+        max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
+        period_tol=period_tol, stop=stop, dwell=dwell,
+    )  # fmt: skip
+    config = _census_config(system, param, vals, start_arr, stop, settings, backend)
+    layout = CensusLayout(
+        param, vals, start_arr, settings.max_points, system.state_names, stop == "converged"
+    )
+    y0 = system.initial_state(None)
+    n_v, n_s = len(vals), len(start_arr)
+    runner = _census_runner(backend, scheduler, n_workers, system, settings)
+
+    with contextlib.ExitStack() as stack:
+        nthreads = stack.enter_context(_numba_threads(threads))
+        chunk_size = _census_chunk_size(chunk_size, backend, runner, nthreads)
+        if out is not None:
+            file = stack.enter_context(
+                CensusFile.open(
+                    out, config, layout, title=title, notes=notes, package_version=package_version()
+                )
+            )
+            done = file.done_mask()
+            mem = None
+        else:
+            file = None
+            done = np.zeros((n_v, n_s), dtype=bool)
+            mem = CensusFile.empty_arrays(layout)
+        bar = _census_bar(stack, progress, done, param)
+        units = _units(vals, start_arr, done, chunk_size, nthreads)
+        results = stack.enter_context(
+            contextlib.closing(runner(units, system, (param,), y0, settings))
+        )
+        for unit, res in results:
+            n_written = _store_unit(unit, res, file, mem, n_s)
+            if bar is not None:
+                bar.update(n_written)
+
+    if out is not None:
+        return load_census(
+            out, identity_tol=identity_tol, track_threshold=track_threshold, _write=True
+        )
+    labels, attractors, tracks = classify_census(
+        vals, mem, period_tol=settings.period_tol, identity_tol=identity_tol,
+        track_threshold=track_threshold,
+    )  # fmt: skip
+    return CensusResult(
+        param=param, values=vals, starts=start_arr, labels=labels, status_code=mem["status"],
+        period=mem["period"], attractors=attractors, tracks=tracks,
+        state_names=system.state_names, system=system, settings=settings.to_dict(),
+        raw=mem,
+    )  # fmt: skip
+
+
+def _check_census_args(
+    system, param, values, stop, backend, scheduler, n_workers, track_threshold, identity_tol
+) -> np.ndarray:
+    """Check :func:`census`'s arguments other than the starts and settings; the values."""
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if not isinstance(param, str) or param not in SWEEPABLE:
@@ -306,14 +369,11 @@ def census(
         raise ValueError(f"track_threshold must be a number > 0, got {track_threshold!r}")
     if identity_tol is not None and (not np.isfinite(identity_tol) or identity_tol <= 0):
         raise ValueError(f"identity_tol must be a number > 0, got {identity_tol!r}")
-    start_arr, box_arr = _check_starts(
-        system, n_starts, box, starts, seed, include_zero, param, vals
-    )
-    settings = Settings.resolve(
-        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,
-        max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
-        period_tol=period_tol, stop=stop, dwell=dwell,
-    )  # fmt: skip
+    return vals
+
+
+def _census_config(system, param, vals, start_arr, stop, settings, backend) -> dict:
+    """Everything that determines a census's results (stored in its file, and hashed)."""
     base = system.to_dict()
     base[param] = None
     config = {
@@ -329,11 +389,13 @@ def census(
     }
     if backend == "cuda":  # GPU points differ from the CPU's at ~1e-9: never mixed in a file
         config["backend"] = "cuda"
-    layout = CensusLayout(
-        param, vals, start_arr, settings.max_points, system.state_names, stop == "converged"
-    )
-    y0 = system.initial_state(None)
-    n_v, n_s = len(vals), len(start_arr)
+    return config
+
+
+def _census_runner(backend, scheduler, n_workers, system, settings):
+    """The backend's runner (its extra imported only when chosen)."""
+    from ..backends.local import run_local
+
     runner = run_local
     if backend == "dask":
         from ..backends.dask import dask_runner
@@ -343,72 +405,51 @@ def census(
         from ..backends.cuda import cuda_runner
 
         runner = cuda_runner(system, settings, "census")
+    return runner
 
-    with contextlib.ExitStack() as stack:
-        nthreads = stack.enter_context(_numba_threads(threads))
-        if chunk_size is None:
-            # the Dask runner splits each unit over its workers and waits for the whole
-            # unit before the next: units of 64 pairs keep a small cluster busy
-            chunk_size = {"local": 32 * nthreads, "dask": 64}.get(
-                backend, getattr(runner, "default_chunk_size", 64)
-            )
-        elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
-            raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
-        if out is not None:
-            file = stack.enter_context(
-                CensusFile.open(
-                    out, config, layout, title=title, notes=notes, package_version=package_version()
-                )
-            )
-            done = file.done_mask()
-            mem = None
-        else:
-            file = None
-            done = np.zeros((n_v, n_s), dtype=bool)
-            mem = CensusFile.empty_arrays(layout)
-        n_todo = int(done.size - done.sum())
-        show = sys.stderr.isatty() if progress is None else bool(progress)
-        bar = None
-        if show and n_todo:
-            from tqdm.auto import tqdm
 
-            bar = stack.enter_context(
-                tqdm(total=done.size, initial=done.size - n_todo, unit="run",
-                     desc=f"census {param}", dynamic_ncols=True, smoothing=0.1)
-            )  # fmt: skip
-        units = _units(vals, start_arr, done, chunk_size, nthreads)
-        results = stack.enter_context(
-            contextlib.closing(runner(units, system, (param,), y0, settings))
+def _census_chunk_size(chunk_size, backend, runner, nthreads) -> int:
+    """(value, start) pairs per unit of work: the caller's, or the backend's default."""
+    if chunk_size is None:
+        # the Dask runner splits each unit over its workers and waits for the whole
+        # unit before the next: units of 64 pairs keep a small cluster busy
+        chunk_size = {"local": 32 * nthreads, "dask": 64}.get(
+            backend, getattr(runner, "default_chunk_size", 64)
         )
-        for unit, res in results:
-            flat = np.asarray(unit.targets)
-            order = np.argsort(flat, kind="stable")
-            data = {k: v[:, 0][order] for k, v in res.items()}
-            flat = flat[order]
-            if file is not None:
-                file.write_pairs(flat, data)
-            else:
-                vi, si = np.divmod(flat, n_s)
-                for k, v in data.items():
-                    mem[k][vi, si] = v
-                mem["done"][vi, si] = 1
-            if bar is not None:
-                bar.update(len(flat))
+    elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
+        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
+    return chunk_size
 
-    if out is not None:
-        return load_census(
-            out, identity_tol=identity_tol, track_threshold=track_threshold, _write=True
-        )
-    labels, attractors, tracks = classify_census(
-        vals, mem, period_tol=settings.period_tol, identity_tol=identity_tol,
-        track_threshold=track_threshold,
-    )  # fmt: skip
-    return CensusResult(
-        param=param, values=vals, starts=start_arr, labels=labels, status_code=mem["status"],
-        period=mem["period"], attractors=attractors, tracks=tracks,
-        state_names=system.state_names, system=system, settings=settings.to_dict(),
-        raw=mem,
-    )  # fmt: skip
+
+def _census_bar(stack, progress, done, param):
+    """A progress bar over the pairs still to run (None when not shown)."""
+    n_todo = int(done.size - done.sum())
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    bar = None
+    if show and n_todo:
+        from tqdm.auto import tqdm
+
+        bar = stack.enter_context(
+            tqdm(total=done.size, initial=done.size - n_todo, unit="run",
+                 desc=f"census {param}", dynamic_ncols=True, smoothing=0.1)
+        )  # fmt: skip
+    return bar
+
+
+def _store_unit(unit, res, file, mem, n_s) -> int:
+    """Write one unit's results, in pair order, to the file or the in-memory arrays."""
+    flat = np.asarray(unit.targets)
+    order = np.argsort(flat, kind="stable")
+    data = {k: v[:, 0][order] for k, v in res.items()}
+    flat = flat[order]
+    if file is not None:
+        file.write_pairs(flat, data)
+    else:
+        vi, si = np.divmod(flat, n_s)
+        for k, v in data.items():
+            mem[k][vi, si] = v
+        mem["done"][vi, si] = 1
+    return len(flat)
 
 
 def load_census(

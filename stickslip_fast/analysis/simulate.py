@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -142,41 +143,77 @@ def simulate(
         period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
     y_init = system.initial_state(y0)
-    n = system.n_state
     if sample_dt is not None:
         sample_dt = check_real("sample_dt", sample_dt)
-        n_samples = int(math.floor((s.t_end - s.t_transient) / sample_dt + 1e-9)) + 1
-    else:
-        n_samples = 0
-    check_memory(
-        8 * n * (s.max_points + n_samples + WORKSPACE_VECTORS) + 8 * s.max_points,
-        f"a run with n_oscillators = {system.n_oscillators}, max_points = {s.max_points}"
-        + ("" if sample_dt is None else f" and {n_samples} samples (sample_dt = {sample_dt:g})"),
-    )
-    ring = np.empty((s.max_points, n))
-    tring = np.empty(s.max_points)
-    samples = np.empty((n_samples, n))
-    stat_i = np.zeros(N_STAT_I, dtype=np.int64)
-    stat_f = np.zeros(N_STAT_F)
-    y_end = np.empty(n)
+    bufs = _RunBuffers.allocate(system, s, sample_dt)
+    code = _run_kernel(system, s, y_init, sample_dt, bufs)
+    return _result(system, s, STATUS_NAMES[code], sample_dt, bufs)
+
+
+@dataclass
+class _RunBuffers:
+    """The arrays one compiled run writes into (allocated once, before the run)."""
+
+    ring: np.ndarray
+    tring: np.ndarray
+    samples: np.ndarray
+    stat_i: np.ndarray
+    stat_f: np.ndarray
+    y_end: np.ndarray
+
+    @classmethod
+    def allocate(cls, system: System, s: Settings, sample_dt: float | None) -> _RunBuffers:
+        n = system.n_state
+        if sample_dt is not None:
+            n_samples = int(math.floor((s.t_end - s.t_transient) / sample_dt + 1e-9)) + 1
+        else:
+            n_samples = 0
+        check_memory(
+            8 * n * (s.max_points + n_samples + WORKSPACE_VECTORS) + 8 * s.max_points,
+            f"a run with n_oscillators = {system.n_oscillators}, max_points = {s.max_points}"
+            + (
+                "" if sample_dt is None else f" and {n_samples} samples (sample_dt = {sample_dt:g})"
+            ),
+        )
+        return cls(
+            ring=np.empty((s.max_points, n)),
+            tring=np.empty(s.max_points),
+            samples=np.empty((n_samples, n)),
+            stat_i=np.zeros(N_STAT_I, dtype=np.int64),
+            stat_f=np.zeros(N_STAT_F),
+            y_end=np.empty(n),
+        )
+
+
+def _run_kernel(
+    system: System, s: Settings, y_init: np.ndarray, sample_dt: float | None, b: _RunBuffers
+) -> int:
+    """Run the compiled trajectory kernel (interruptible); its status code."""
     rs = run_settings(
         s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
         s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
     )  # fmt: skip
-    code = call_interruptible(
+    return call_interruptible(
         integrate, METHODS.index(s.method), y_init, system.to_array(), system.n_oscillators,
-        system.is_dc_motor, kernel_variant(system.n_oscillators, system.is_dc_motor), rs, ring,
-        tring, samples, 1.0 if sample_dt is None else sample_dt,
-        y_end, stat_i, stat_f, abort=new_abort_flag(),
+        system.is_dc_motor, kernel_variant(system.n_oscillators, system.is_dc_motor), rs, b.ring,
+        b.tring, b.samples, 1.0 if sample_dt is None else sample_dt,
+        b.y_end, b.stat_i, b.stat_f, abort=new_abort_flag(),
     )  # fmt: skip
-    status = STATUS_NAMES[code]
+
+
+def _result(
+    system: System, s: Settings, status: str, sample_dt: float | None, b: _RunBuffers
+) -> SimulationResult:
+    """The run's points in time order, its period, samples and statistics."""
+    n = system.n_state
+    stat_i, stat_f = b.stat_i, b.stat_f
     n_cross = int(stat_i[I_CROSSINGS])
     k = min(n_cross, s.max_points)
     pts = np.empty((k, n))
     tp = np.empty(k)
     period = 0
     if status == "ok":
-        unroll_ring(ring, tring, n_cross, pts, tp)
+        unroll_ring(b.ring, b.tring, n_cross, pts, tp)
         period = int(detect_period(pts, k, s.period_tol, MAX_PERIOD))
     else:
         pts = pts[:0]
@@ -185,7 +222,7 @@ def simulate(
     if sample_dt is not None:
         m = int(stat_i[I_SAMPLES])
         t = s.t_transient + sample_dt * np.arange(m)
-        y = samples[:m]
+        y = b.samples[:m]
     return SimulationResult(
         system=system,
         method=s.method,
@@ -198,7 +235,7 @@ def simulate(
         n_steps=int(stat_i[I_STEPS]),
         n_rejected=int(stat_i[I_REJECTED]),
         t_final=float(stat_f[F_T_FINAL]),
-        final_state=y_end,
+        final_state=b.y_end,
         amplitude=float(stat_f[F_AMPLITUDE]),
         t_converged=float(stat_f[F_T_CONVERGED]),
         t=t,

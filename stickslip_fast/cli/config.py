@@ -180,110 +180,12 @@ def _analyses(value: Any) -> tuple[str, ...]:
 
 def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
     """Validate a configuration mapping (as read from TOML)."""
-    for section, value in data.items():
-        if section not in _SECTIONS:
-            raise ConfigError(f"unknown section or key {section!r}; allowed: {sorted(_SECTIONS)}")
-        allowed = _SECTIONS[section]
-        if allowed is not None:
-            if not isinstance(value, dict):
-                raise ConfigError(
-                    f"{section!r} must be a table ([{section}] with its keys), got {value!r}"
-                )
-            unknown = sorted(set(value) - allowed)
-            if unknown:
-                raise ConfigError(
-                    f"unknown key(s) {unknown} in [{section}]; allowed: {sorted(allowed)}"
-                )
-
-    if not isinstance(data.get("system", {}), dict):
-        raise ConfigError(
-            f"'system' must be a table ([system] with preset = ... and fields), "
-            f"got {data['system']!r}"
-        )
-    sys_table = dict(data.get("system", {}))
-    preset = sys_table.pop("preset", None)
-    try:
-        system = System.preset(preset, **sys_table) if preset else System.from_dict(sys_table)
-    except (ValueError, TypeError) as exc:
-        raise ConfigError(f"[system]: {exc}") from None
-
-    initial = data.get("initial", {})
-    y0 = None
-    if "y0" in initial and "y0_paper" in initial:
-        raise ConfigError("[initial]: give y0 or y0_paper, not both")
-    if "vb" in initial and "y0_paper" not in initial:
-        raise ConfigError("[initial].vb is only used with y0_paper (y0 includes vb)")
-    try:
-        if "y0" in initial:
-            y0 = system.initial_state(initial["y0"])
-        elif "y0_paper" in initial:
-            vb = initial.get("vb", 0.0 if system.is_dc_motor else None)
-            if vb is not None and not system.is_dc_motor:
-                raise ConfigError("[initial].vb needs drive = 'dc-motor'")
-            y0 = system.initial_state(
-                paper_order_to_state(initial["y0_paper"], system.n_oscillators, vb)
-            )
-    except ConfigError:
-        raise
-    except (ValueError, TypeError) as exc:
-        key = "y0" if "y0" in initial else "y0_paper"
-        raise ConfigError(f"[initial].{key}: {exc}") from None
-
-    integration = dict(data.get("integration", {}))
-    for key, value in integration.items():
-        kind, types = _TOML_TYPES[_SETTING_TYPES[key]]
-        if isinstance(value, bool) or not isinstance(value, types):
-            raise ConfigError(f"[integration].{key} must be {kind}, got {value!r}")
-
-    sample_dt = data.get("simulate", {}).get("sample_dt")
-    if sample_dt is not None and (
-        isinstance(sample_dt, bool) or not isinstance(sample_dt, (int, float)) or sample_dt <= 0
-    ):
-        raise ConfigError(f"[simulate].sample_dt must be a number > 0, got {sample_dt!r}")
-
-    sweep = None
-    if "sweep" in data:
-        sw = dict(data["sweep"])
-        if "param" not in sw or "values" not in sw:
-            raise ConfigError("[sweep] needs 'param' and 'values'")
-        param = sw["param"]
-        if isinstance(param, list):
-            if len(param) != 2 or not all(isinstance(p, str) for p in param):
-                raise ConfigError(
-                    f"[sweep].param must be a name or a list of two names, got {param!r}"
-                )
-            vals = sw["values"]
-            if not isinstance(vals, list) or len(vals) != 2:
-                raise ConfigError(
-                    "[sweep].values must be a list of two value specs for a 2-D sweep"
-                )
-            values: Any = tuple(
-                _values_from_spec(v, f"[sweep].values[{i}]") for i, v in enumerate(vals)
-            )
-            param = tuple(param)
-        elif isinstance(param, str):
-            values = _values_from_spec(sw["values"], "[sweep].values")
-        else:
-            raise ConfigError(f"[sweep].param must be a string, got {param!r}")
-        for name in (param,) if isinstance(param, str) else param:
-            if name not in SWEEPABLE:
-                raise ConfigError(
-                    f"[sweep].param {name!r} cannot be swept; choose from {list(SWEEPABLE)}"
-                )
-        sweep = {"param": param, "values": values}
-        if "mode" in sw:
-            modes = ("restart", "continuation", "continuation-both")
-            if sw["mode"] not in modes:
-                raise ConfigError(f"[sweep].mode must be one of {modes}, got {sw['mode']!r}")
-            sweep["mode"] = sw["mode"]
-        if "chunk_size" in sw:
-            cs = sw["chunk_size"]
-            if isinstance(cs, bool) or not isinstance(cs, int) or cs < 1:
-                raise ConfigError(f"[sweep].chunk_size must be an integer >= 1, got {cs!r}")
-            sweep["chunk_size"] = cs
-        if "analyses" in sw:
-            sweep["analyses"] = _analyses(sw["analyses"])
-
+    _check_sections(data)
+    system = _parse_system(data)
+    y0 = _parse_initial(data.get("initial", {}), system)
+    integration = _parse_integration(data)
+    sample_dt = _parse_sample_dt(data)
+    sweep = _parse_sweep(dict(data["sweep"])) if "sweep" in data else None
     census = _parse_census(data["census"]) if "census" in data else None
     continuation = _parse_continue(data["continue"]) if "continue" in data else None
 
@@ -304,6 +206,125 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         source=source,
         raw=data,
     )
+
+
+def _check_sections(data: dict[str, Any]) -> None:
+    """Every section and key is known, and every section that must be a table is one."""
+    for section, value in data.items():
+        if section not in _SECTIONS:
+            raise ConfigError(f"unknown section or key {section!r}; allowed: {sorted(_SECTIONS)}")
+        allowed = _SECTIONS[section]
+        if allowed is not None:
+            if not isinstance(value, dict):
+                raise ConfigError(
+                    f"{section!r} must be a table ([{section}] with its keys), got {value!r}"
+                )
+            unknown = sorted(set(value) - allowed)
+            if unknown:
+                raise ConfigError(
+                    f"unknown key(s) {unknown} in [{section}]; allowed: {sorted(allowed)}"
+                )
+
+
+def _parse_system(data: dict[str, Any]) -> System:
+    """The ``[system]`` table: a preset with overrides, or every field."""
+    if not isinstance(data.get("system", {}), dict):
+        raise ConfigError(
+            f"'system' must be a table ([system] with preset = ... and fields), "
+            f"got {data['system']!r}"
+        )
+    sys_table = dict(data.get("system", {}))
+    preset = sys_table.pop("preset", None)
+    try:
+        system = System.preset(preset, **sys_table) if preset else System.from_dict(sys_table)
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"[system]: {exc}") from None
+    return system
+
+
+def _parse_initial(initial: dict[str, Any], system: System) -> np.ndarray | None:
+    """The ``[initial]`` table: ``y0`` in state order, or ``y0_paper`` (with ``vb``)."""
+    y0 = None
+    if "y0" in initial and "y0_paper" in initial:
+        raise ConfigError("[initial]: give y0 or y0_paper, not both")
+    if "vb" in initial and "y0_paper" not in initial:
+        raise ConfigError("[initial].vb is only used with y0_paper (y0 includes vb)")
+    try:
+        if "y0" in initial:
+            y0 = system.initial_state(initial["y0"])
+        elif "y0_paper" in initial:
+            vb = initial.get("vb", 0.0 if system.is_dc_motor else None)
+            if vb is not None and not system.is_dc_motor:
+                raise ConfigError("[initial].vb needs drive = 'dc-motor'")
+            y0 = system.initial_state(
+                paper_order_to_state(initial["y0_paper"], system.n_oscillators, vb)
+            )
+    except ConfigError:
+        raise
+    except (ValueError, TypeError) as exc:
+        key = "y0" if "y0" in initial else "y0_paper"
+        raise ConfigError(f"[initial].{key}: {exc}") from None
+    return y0
+
+
+def _parse_integration(data: dict[str, Any]) -> dict[str, Any]:
+    """The ``[integration]`` table, its types checked (its values are checked by Settings)."""
+    integration = dict(data.get("integration", {}))
+    for key, value in integration.items():
+        kind, types = _TOML_TYPES[_SETTING_TYPES[key]]
+        if isinstance(value, bool) or not isinstance(value, types):
+            raise ConfigError(f"[integration].{key} must be {kind}, got {value!r}")
+    return integration
+
+
+def _parse_sample_dt(data: dict[str, Any]) -> float | int | None:
+    """``[simulate].sample_dt``: a number > 0, or None."""
+    sample_dt = data.get("simulate", {}).get("sample_dt")
+    if sample_dt is not None and (
+        isinstance(sample_dt, bool) or not isinstance(sample_dt, (int, float)) or sample_dt <= 0
+    ):
+        raise ConfigError(f"[simulate].sample_dt must be a number > 0, got {sample_dt!r}")
+    return sample_dt
+
+
+def _parse_sweep(sw: dict[str, Any]) -> dict[str, Any]:
+    """The ``[sweep]`` table: one or two parameters with their values, mode, chunking, analyses."""
+    if "param" not in sw or "values" not in sw:
+        raise ConfigError("[sweep] needs 'param' and 'values'")
+    param = sw["param"]
+    if isinstance(param, list):
+        if len(param) != 2 or not all(isinstance(p, str) for p in param):
+            raise ConfigError(f"[sweep].param must be a name or a list of two names, got {param!r}")
+        vals = sw["values"]
+        if not isinstance(vals, list) or len(vals) != 2:
+            raise ConfigError("[sweep].values must be a list of two value specs for a 2-D sweep")
+        values: Any = tuple(
+            _values_from_spec(v, f"[sweep].values[{i}]") for i, v in enumerate(vals)
+        )
+        param = tuple(param)
+    elif isinstance(param, str):
+        values = _values_from_spec(sw["values"], "[sweep].values")
+    else:
+        raise ConfigError(f"[sweep].param must be a string, got {param!r}")
+    for name in (param,) if isinstance(param, str) else param:
+        if name not in SWEEPABLE:
+            raise ConfigError(
+                f"[sweep].param {name!r} cannot be swept; choose from {list(SWEEPABLE)}"
+            )
+    sweep = {"param": param, "values": values}
+    if "mode" in sw:
+        modes = ("restart", "continuation", "continuation-both")
+        if sw["mode"] not in modes:
+            raise ConfigError(f"[sweep].mode must be one of {modes}, got {sw['mode']!r}")
+        sweep["mode"] = sw["mode"]
+    if "chunk_size" in sw:
+        cs = sw["chunk_size"]
+        if isinstance(cs, bool) or not isinstance(cs, int) or cs < 1:
+            raise ConfigError(f"[sweep].chunk_size must be an integer >= 1, got {cs!r}")
+        sweep["chunk_size"] = cs
+    if "analyses" in sw:
+        sweep["analyses"] = _analyses(sw["analyses"])
+    return sweep
 
 
 def _parse_census(table: dict[str, Any]) -> dict[str, Any]:
