@@ -186,6 +186,22 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_batch_options(p: argparse.ArgumentParser, where: str, per: str) -> None:
+    """The options of the commands that run many values into a file (sweep, census)."""
+    _add_common(p)
+    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="HDF5 result file")
+    p.add_argument("--threads", type=int, help="Numba threads (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.add_argument(
+        "--backend",
+        choices=("local", "dask", "cuda"),
+        help=f"where {where} (default: local, or dask with --scheduler/--workers); "
+        f"cuda: one GPU thread per {per} (docs/gpu.md)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="stickslip-fast",
@@ -205,33 +221,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser("sweep", help="bifurcation sweep into an HDF5 file (resumable)")
-    _add_common(p)
-    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="HDF5 result file")
-    p.add_argument("--threads", type=int, help="Numba threads (default: all cores)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
-    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
-    p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
-    p.add_argument(
-        "--backend",
-        choices=("local", "dask", "cuda"),
-        help="where values run (default: local, or dask with --scheduler/--workers); "
-        "cuda: one GPU thread per value (docs/gpu.md)",
-    )
+    _add_batch_options(p, "values run", "value")
     p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("census", help="attractor census: every start at every value (resumable)")
-    _add_common(p)
-    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="HDF5 result file")
-    p.add_argument("--threads", type=int, help="Numba threads (default: all cores)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
-    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
-    p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
-    p.add_argument(
-        "--backend",
-        choices=("local", "dask", "cuda"),
-        help="where runs go (default: local, or dask with --scheduler/--workers); "
-        "cuda: one GPU thread per (value, start) (docs/gpu.md)",
-    )
+    _add_batch_options(p, "runs go", "(value, start)")
     p.set_defaults(func=_cmd_census)
 
     p = sub.add_parser(

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,7 +11,13 @@ import h5py
 import numpy as np
 
 from ..core.poincare import STATUS_NAMES
-from .layout import _DESCRIPTIONS, PER_VALUE_FIELDS, SCHEMA_VERSION
+from .layout import (
+    _DESCRIPTIONS,
+    PER_VALUE_FIELDS,
+    SCHEMA_VERSION,
+    add_point_and_state_scales,
+    write_root_attrs,
+)
 from .sweepfile import SweepFile
 
 #: Per-run integer datasets of a census file and their dtypes.
@@ -68,15 +73,7 @@ class CensusFile(SweepFile):
     @staticmethod
     def _create_layout(h5, layout, text, digest, config, title, notes, package_version):
         a = h5.attrs
-        a["schema_version"] = SCHEMA_VERSION
-        a["package_version"] = package_version
-        a["kind"] = "census"
-        a["config"] = text
-        a["config_sha256"] = digest
-        a["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-        a["title"] = title
-        a["notes"] = notes
-        a["Conventions"] = "CF-1.8"
+        write_root_attrs(a, text, digest, title, notes, package_version, kind="census")
         a["param"] = layout.param
         a["classified"] = 0
         for key in ("method", "rtol", "atol", "h", "t_end", "t_transient", "max_points"):
@@ -95,15 +92,7 @@ class CensusFile(SweepFile):
         d.make_scale("start")
         d.attrs["long_name"] = "index of the initial state"
         scales["start"] = d
-        d = h5.create_dataset("point", data=np.arange(layout.max_points, dtype="i4"))
-        d.make_scale("point")
-        d.attrs["long_name"] = "index of the Poincare point, in time order"
-        scales["point"] = d
-        d = h5.create_dataset("state", data=np.array(layout.state_names, dtype=object),
-                              dtype=h5py.string_dtype())  # fmt: skip
-        d.make_scale("state")
-        d.attrs["long_name"] = "state variable"
-        scales["state"] = d
+        add_point_and_state_scales(h5, layout.max_points, layout.state_names, scales)
         d = h5.create_dataset("initial_state", data=np.asarray(layout.starts, dtype="f8"))
         d.dims[0].attach_scale(scales["start"])
         d.dims[1].attach_scale(scales["state"])

@@ -2,12 +2,41 @@
 
 from __future__ import annotations
 
+import datetime as _dt
 from dataclasses import dataclass
 from typing import Any
 
+import h5py
 import numpy as np
 
 SCHEMA_VERSION = 1
+
+
+def write_root_attrs(attrs, text, digest, title, notes, package_version, kind=None) -> None:
+    """The root attributes every result file opens with (``kind``: census and trajectory files)."""
+    attrs["schema_version"] = SCHEMA_VERSION
+    attrs["package_version"] = package_version
+    if kind is not None:
+        attrs["kind"] = kind
+    attrs["config"] = text
+    attrs["config_sha256"] = digest
+    attrs["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    attrs["title"] = title
+    attrs["notes"] = notes
+    attrs["Conventions"] = "CF-1.8"
+
+
+def add_point_and_state_scales(h5, max_points: int, state_names, scales: dict) -> None:
+    """The ``point`` and ``state`` coordinates (dimension scales) of sweep and census files."""
+    d = h5.create_dataset("point", data=np.arange(max_points, dtype="i4"))
+    d.make_scale("point")
+    d.attrs["long_name"] = "index of the Poincare point, in time order"
+    scales["point"] = d
+    d = h5.create_dataset("state", data=np.array(state_names, dtype=object),
+                          dtype=h5py.string_dtype())  # fmt: skip
+    d.make_scale("state")
+    d.attrs["long_name"] = "state variable"
+    scales["state"] = d
 
 
 #: Per-value integer datasets and their dtypes.

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import datetime as _dt
 import hashlib
 import json
 import math
@@ -29,7 +28,15 @@ from .base import (
     ensure_room,
     open_h5,
 )
-from .layout import _DESCRIPTIONS, ANALYSES, PER_VALUE_FIELDS, SCHEMA_VERSION, SweepLayout
+from .layout import (
+    _DESCRIPTIONS,
+    ANALYSES,
+    PER_VALUE_FIELDS,
+    SCHEMA_VERSION,
+    SweepLayout,
+    add_point_and_state_scales,
+    write_root_attrs,
+)
 
 
 class SweepFile:
@@ -166,14 +173,7 @@ class SweepFile:
 
     @staticmethod
     def _create_layout(h5, layout, text, digest, config, title, notes, package_version):
-        h5.attrs["schema_version"] = SCHEMA_VERSION
-        h5.attrs["package_version"] = package_version
-        h5.attrs["config"] = text
-        h5.attrs["config_sha256"] = digest
-        h5.attrs["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-        h5.attrs["title"] = title
-        h5.attrs["notes"] = notes
-        h5.attrs["Conventions"] = "CF-1.8"
+        write_root_attrs(h5.attrs, text, digest, title, notes, package_version)
         for key in ("mode", "method", "rtol", "atol", "h", "t_end", "t_transient", "max_points"):
             value = config.get("settings", {}).get(key, config.get(key))
             if value is not None:
@@ -195,15 +195,7 @@ class SweepFile:
             d.make_scale(name)
             d.attrs["long_name"] = f"swept parameter {name} (nondimensional)"
             scales[name] = d
-        d = h5.create_dataset("point", data=np.arange(layout.max_points, dtype="i4"))
-        d.make_scale("point")
-        d.attrs["long_name"] = "index of the Poincare point, in time order"
-        scales["point"] = d
-        d = h5.create_dataset("state", data=np.array(layout.state_names, dtype=object),
-                              dtype=h5py.string_dtype())  # fmt: skip
-        d.make_scale("state")
-        d.attrs["long_name"] = "state variable"
-        scales["state"] = d
+        add_point_and_state_scales(h5, layout.max_points, layout.state_names, scales)
 
         grid = layout.grid_shape
         kp = layout.max_points

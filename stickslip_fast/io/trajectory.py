@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 from pathlib import Path
 from typing import Any
@@ -11,7 +10,7 @@ import h5py
 import numpy as np
 
 from .base import ResultFileError, _make_parent, _os_error, _short, config_digest, open_h5
-from .layout import SCHEMA_VERSION
+from .layout import SCHEMA_VERSION, write_root_attrs
 
 
 # ------------------------------------------------------------- single runs
@@ -89,15 +88,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
     try:
         with h5py.File(tmp, "w", libver="latest") as h5:
             a = h5.attrs
-            a["schema_version"] = SCHEMA_VERSION
-            a["package_version"] = package_version()
-            a["kind"] = "trajectory"
-            a["config"] = text
-            a["config_sha256"] = digest
-            a["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-            a["title"] = title
-            a["notes"] = notes
-            a["Conventions"] = "CF-1.8"
+            write_root_attrs(a, text, digest, title, notes, package_version(), kind="trajectory")
             a["status"] = result.status
             a["period"] = int(result.period)
             a["method"] = result.method
