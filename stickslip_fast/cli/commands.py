@@ -8,6 +8,7 @@ A thin layer over the public API: it parses a TOML config (see
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -97,6 +98,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def _no_gpu_in_one_line(backend: str):
+    """With the CUDA backend, a RuntimeError (no GPU, no driver) becomes one line, not a traceback."""
+    try:
+        yield
+    except RuntimeError as exc:
+        if backend != "cuda":
+            raise
+        raise ValueError(str(exc)) from None
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from ..analysis.sweep import sweep
 
@@ -107,7 +119,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     integ = dict(cfg.integration)
     integ.setdefault("max_points", 256)
     backend = args.backend or ("dask" if args.scheduler or args.workers else "local")
-    try:
+    with _no_gpu_in_one_line(backend):
         res = sweep(
             cfg.system, sw["param"], sw["values"], y0=cfg.y0, mode=sw.get("mode", "restart"),
             chunk_size=sw.get("chunk_size"), out=args.output, threads=args.threads,
@@ -115,10 +127,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             n_workers=args.workers, title=cfg.title, notes=cfg.notes,
             analyses=sw.get("analyses", ()), **integ,
         )  # fmt: skip
-    except RuntimeError as exc:
-        if backend != "cuda":
-            raise
-        raise ValueError(str(exc)) from None  # no GPU: one line, not a traceback
     if not args.quiet:
         print(_report(res.path) if res.path is not None else repr(res))
     return 0
@@ -140,16 +148,12 @@ def _cmd_census(args: argparse.Namespace) -> int:
             )
         c["stop"] = integ.pop("stop")
     backend = args.backend or ("dask" if (args.scheduler or args.workers) else "local")
-    try:
+    with _no_gpu_in_one_line(backend):
         census(
             cfg.system, c.pop("param"), c.pop("values"), out=args.output, threads=args.threads,
             progress=False if args.quiet else None, backend=backend, scheduler=args.scheduler,
             n_workers=args.workers, title=cfg.title, notes=cfg.notes, **c, **integ,
         )  # fmt: skip
-    except RuntimeError as exc:
-        if backend != "cuda":
-            raise
-        raise ValueError(str(exc)) from None  # no GPU: one line, not a traceback
     if not args.quiet:
         print(_census_report(args.output))
     return 0

@@ -7,6 +7,20 @@ import json
 import numpy as np
 
 
+def _header(name: str, attrs: dict, cfg: dict) -> list[str]:
+    """The first lines of every summary: file, title, package, system."""
+    lines = [f"file:      {name}"]
+    if attrs.get("title"):
+        lines.append(f"title:     {attrs['title']}")
+    lines.append(
+        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
+        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
+    )
+    sysd = {k: v for k, v in cfg.get("system", {}).items() if v is not None}
+    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    return lines
+
+
 def _census_report(path) -> str:
     """A text summary of a census file: configuration, progress, attractors per value."""
     import h5py
@@ -19,15 +33,7 @@ def _census_report(path) -> str:
     cfg = json.loads(attrs["config"])
     res = load_census(path)
     done = res.raw["done"].astype(bool)
-    lines = [f"file:      {path}  (census)"]
-    if attrs.get("title"):
-        lines.append(f"title:     {attrs['title']}")
-    lines.append(
-        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
-        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
-    )
-    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
-    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    lines = _header(f"{path}  (census)", attrs, cfg)
     v = res.values
     lines.append(
         f"census:    {res.param} in [{v.min():g}, {v.max():g}] ({v.size} values) x "
@@ -95,15 +101,7 @@ def _sweep_report(path, info: dict) -> tuple[str, bool]:
 
     cfg, attrs = info["config"], info["attrs"]
     done, status, period = info["done"], info["status"], info["period"]
-    lines = [f"file:      {path}"]
-    if attrs.get("title"):
-        lines.append(f"title:     {attrs['title']}")
-    lines.append(
-        f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
-        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
-    )
-    sysd = {k: v for k, v in cfg["system"].items() if v is not None}
-    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    lines = _header(str(path), attrs, cfg)
     axes = [f"{n} in [{a.min():g}, {a.max():g}] ({a.size} values)" for n, a in info["axes"].items()]
     lines.append("sweep:     " + " x ".join(axes) + f", mode {cfg['mode']}")
     st = cfg["settings"]
@@ -136,15 +134,7 @@ def _trajectory_report(path, h5) -> str:
     a = h5.attrs
     cfg = json.loads(a["config"])
     st = cfg.get("settings", {})
-    lines = [f"file:      {path} (single run, simulate -o)"]
-    if a.get("title"):
-        lines.append(f"title:     {a['title']}")
-    lines.append(
-        f"package:   stickslip_fast {a.get('package_version', '?')}, "
-        f"schema {a.get('schema_version')}, created {a.get('created', '?')}"
-    )
-    sysd = {k: v for k, v in cfg.get("system", {}).items() if v is not None}
-    lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
+    lines = _header(f"{path} (single run, simulate -o)", a, cfg)
     if st:
         lines.append(
             f"settings:  method={a.get('method', st.get('method'))} rtol={st['rtol']:g} "
