@@ -247,37 +247,51 @@ def classify_census(
     n_state = final.shape[-1]
 
     # 1. per value: group runs (in start order; each joins the first equal group)
-    groups_all = []  # per value: list of [kind, period, canonical points, members]
-    for i in range(n_v):
-        groups: list[list] = []
-        for j in range(n_s):
-            st = int(status[i, j])
-            if st == _ST_OK and period[i, j] > 0:
-                kind, p = K_ORBIT, int(period[i, j])
-                pts = _canonical_orbit(points[i, j], int(count[i, j]), p)
-            elif st == _ST_OK and count[i, j] > 0:
-                kind, p = K_UNRESOLVED, 0
-                pts = points[i, j, : int(count[i, j])]
-            elif st in (_ST_EQ, _ST_STALLED) and np.all(np.isfinite(final[i, j])):
-                kind, p = (K_EQUILIBRIUM if st == _ST_EQ else K_STALLED), 0
-                pts = final[i, j][None, :]
-            else:
-                continue  # failed, no crossings, or not computed: label -1
-            if not np.all(np.isfinite(pts)):
-                continue  # (cannot happen for a computed run; never group NaN)
-            for g in groups:
-                if g[0] != kind or g[1] != p:
-                    continue
-                if kind == K_UNRESOLVED:
-                    continue  # grouped below, once the census scale is known
-                if _same_cycle(g[2], pts, identity_tol):
-                    g[3].append(j)
-                    break
-            else:
-                groups.append([kind, p, pts, [j]])
-        groups_all.append(groups)
+    groups_all = [  # per value: list of [kind, period, canonical points, members]
+        _group_runs(points[i], count[i], period[i], status[i], final[i], identity_tol)
+        for i in range(n_v)
+    ]
+    scale = _census_scale(groups_all, identity_tol, n_state)
+    for groups in groups_all:
+        _merge_unresolved(groups, scale, track_threshold)
+    # 2. tracks: greedy closest matching between neighbouring values
+    track_of, tracks_info = _match_tracks(groups_all, scale, track_threshold)
+    return _assemble(groups_all, track_of, tracks_info, n_v, n_s)
 
-    # the spread of every state variable over all attractors (tracking distances)
+
+def _group_runs(points, count, period, status, final, identity_tol) -> list[list]:
+    """The runs of one value grouped (in start order; each joins the first equal group)."""
+    groups: list[list] = []
+    for j in range(status.shape[0]):
+        st = int(status[j])
+        if st == _ST_OK and period[j] > 0:
+            kind, p = K_ORBIT, int(period[j])
+            pts = _canonical_orbit(points[j], int(count[j]), p)
+        elif st == _ST_OK and count[j] > 0:
+            kind, p = K_UNRESOLVED, 0
+            pts = points[j, : int(count[j])]
+        elif st in (_ST_EQ, _ST_STALLED) and np.all(np.isfinite(final[j])):
+            kind, p = (K_EQUILIBRIUM if st == _ST_EQ else K_STALLED), 0
+            pts = final[j][None, :]
+        else:
+            continue  # failed, no crossings, or not computed: label -1
+        if not np.all(np.isfinite(pts)):
+            continue  # (cannot happen for a computed run; never group NaN)
+        for g in groups:
+            if g[0] != kind or g[1] != p:
+                continue
+            if kind == K_UNRESOLVED:
+                continue  # grouped below, once the census scale is known
+            if _same_cycle(g[2], pts, identity_tol):
+                g[3].append(j)
+                break
+        else:
+            groups.append([kind, p, pts, [j]])
+    return groups
+
+
+def _census_scale(groups_all, identity_tol, n_state) -> np.ndarray:
+    """The spread of every state variable over all attractors (tracking distances)."""
     allpts = [g[2] for groups in groups_all for g in groups]
     if allpts:
         stack = np.concatenate(allpts, axis=0)
@@ -288,25 +302,32 @@ def classify_census(
         scale = np.maximum(spread, floor)
     else:
         scale = np.ones(n_state)
+    return scale
 
-    # unresolved runs of one value: one attractor per cluster of nearby point clouds
-    for groups in groups_all:
-        merged: list[list] = []
-        for g in groups:
-            if g[0] == K_UNRESOLVED:
-                for m in merged:
-                    if m[0] == K_UNRESOLVED and _hausdorff(m[2], g[2], scale) <= track_threshold:
-                        m[3].extend(g[3])
-                        break
-                else:
-                    merged.append(g)
+
+def _merge_unresolved(groups, scale, track_threshold) -> None:
+    """Unresolved runs of one value: one attractor per cluster of nearby point clouds.
+
+    Then sorts the value's groups: most starts first, ties by first start (in place).
+    """
+    merged: list[list] = []
+    for g in groups:
+        if g[0] == K_UNRESOLVED:
+            for m in merged:
+                if m[0] == K_UNRESOLVED and _hausdorff(m[2], g[2], scale) <= track_threshold:
+                    m[3].extend(g[3])
+                    break
             else:
                 merged.append(g)
-        groups[:] = merged
-        # most starts first; ties by first start
-        groups.sort(key=lambda g: (-len(g[3]), min(g[3])))
+        else:
+            merged.append(g)
+    groups[:] = merged
+    # most starts first; ties by first start
+    groups.sort(key=lambda g: (-len(g[3]), min(g[3])))
 
-    # 2. tracks: greedy closest matching between neighbouring values
+
+def _match_tracks(groups_all, scale, track_threshold) -> tuple[list[list[int]], list[dict]]:
+    """Tracks by greedy closest matching between neighbouring values: ids and track info."""
     track_of: list[list[int]] = []
     tracks_info: list[dict] = []
     for i, groups in enumerate(groups_all):
@@ -337,7 +358,11 @@ def classify_census(
             if g[1] not in info["periods"]:
                 info["periods"].append(g[1])
         track_of.append(ids)
+    return track_of, tracks_info
 
+
+def _assemble(groups_all, track_of, tracks_info, n_v, n_s) -> tuple[np.ndarray, list, list]:
+    """Labels, attractors per value and tracks from the groups and their track ids."""
     labels = np.full((n_v, n_s), -1, dtype=np.int32)
     attractors = []
     for i, groups in enumerate(groups_all):
