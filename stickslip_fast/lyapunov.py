@@ -42,6 +42,7 @@ from .driver import (
 )
 from .interrupt import call_interruptible, new_abort_flag
 from .jit import JIT, OVERLOAD, is_record
+from .messages import plain
 from .params import N_PARAMS
 from .problems import alloc_bordered_linear, make_tangent, tangent_variant
 from .status import ST_ERROR, STATUS_NAMES
@@ -330,12 +331,12 @@ def largest_lyapunov(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("renorm_dt", renorm_dt)):
         if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+            raise ValueError(f"{name} must be finite and > 0, got {plain(value)}")
     if not (math.isfinite(t_transient) and 0 <= t_transient < t_end):
-        raise ValueError(f"t_transient must be in [0, t_end), got {t_transient!r}")
+        raise ValueError(f"t_transient must be in [0, t_end), got {plain(t_transient)}")
     tangent_atol = float(tangent_atol)
     if not (math.isfinite(tangent_atol) and tangent_atol > 0):
-        raise ValueError(f"tangent_atol must be finite and > 0, got {tangent_atol!r}")
+        raise ValueError(f"tangent_atol must be finite and > 0, got {plain(tangent_atol)}")
     y_init = system.initial_state(y0)
     n = system.n_state
     if u0 is None:

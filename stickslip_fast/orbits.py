@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from .interrupt import call_interruptible, new_abort_flag
+from .messages import plain
 from .model import dense_jacobian, friction, rhs
 from .params import eta_prime
 from .poincare import STATUS_NAMES
@@ -323,7 +324,7 @@ def _sensitivity_params(system: System, param: str | None, rel_step: float):
     if param not in SWEEPABLE:
         raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
     if not (isinstance(rel_step, (int, float)) and 0 < rel_step < 1e-2):
-        raise ValueError(f"param_step must be a number in (0, 0.01), got {rel_step!r}")
+        raise ValueError(f"param_step must be a number in (0, 0.01), got {plain(rel_step)}")
     lam = float(getattr(system, param))
     h = rel_step * max(1.0, abs(lam))
 
@@ -477,14 +478,14 @@ def find_orbit(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if period is not None:
         if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or period < 1:
-            raise ValueError(f"period must be an integer >= 1, got {period!r}")
+            raise ValueError(f"period must be an integer >= 1, got {plain(period)}")
         period = int(period)
     for name, v in (
         ("tol", tol), ("rtol", rtol), ("atol", atol), ("t_max", t_max),
         ("tangent_atol", tangent_atol),
     ):  # fmt: skip
         if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+            raise ValueError(f"{name} must be a finite number > 0, got {plain(v)}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
         raise ValueError(f"max_iter must be an integer >= 0, got {max_iter!r}")
     z, period = _start_from(system, start, period, t_max)
@@ -684,14 +685,14 @@ def find_equilibrium(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if isinstance(start, str):
         if start not in ("sliding", "stall"):
-            raise ValueError(f'start must be "sliding", "stall" or a state, got {start!r}')
+            raise ValueError(f'start must be "sliding", "stall" or a state, got {plain(start)}')
         if start == "stall" and not system.is_dc_motor:
             raise ValueError('start="stall" needs a DC-motor drive (drive="dc-motor")')
         y = _sliding_guess(system, _belt_speed(system, start))
     else:
         y = _finite_state("start", start, system.n_state)
     if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
+        raise ValueError(f"tol must be a finite number > 0, got {plain(tol)}")
     p = system.to_array()
     nosc, dc = system.n_oscillators, system.is_dc_motor
     f = _field(system, y)

@@ -23,6 +23,7 @@ from .settings import (
 from .system import System
 from .trajectory import (
     F_AMPLITUDE,
+    F_REST_TIME,
     F_T_CONVERGED,
     F_T_FINAL,
     I_CROSSINGS,
@@ -75,8 +76,9 @@ class SimulationResult:
     period : int
         Smallest p <= 64 with which the points repeat; 0 if none.
     status : str
-        "ok", "equilibrium", "stalled", "no-crossings", "nonfinite",
-        "step-underflow" or "max-steps".
+        "ok", "equilibrium", "stalled", "unsettled", "no-crossings",
+        "nonfinite", "step-underflow" or "max-steps" (see
+        :data:`~stickslip_fast.STATUS_NAMES` and docs/reliability.md).
     n_steps, n_rejected : int
         Accepted and rejected steps.
     t_final : float
@@ -84,10 +86,15 @@ class SimulationResult:
     final_state : ndarray, shape (n_state,)
     amplitude : float
         Distance from rest over the recording window: the largest |dx_i| or
-        |dphi_i|, or the range of v_b. At rest when below ``equilibrium_tol``.
+        |dphi_i|, or the range of v_b (informative; the status is judged on
+        the end of the run, see :func:`simulate`'s ``equilibrium_tol``).
     t_converged : float
         With ``stop="converged"``: when the run was found converged (NaN if it
         reached t_end first, and always with ``stop="fixed"``).
+    rest_time : float
+        How long the disks had been at rest at ``t_final`` (-1.0 if moving
+        then): "equilibrium" needs ``dwell`` (or the whole recording window),
+        less is "unsettled".
     t, y : ndarray or None
         Uniform samples from t_transient every ``sample_dt`` (when requested).
     settings : Settings
@@ -108,6 +115,7 @@ class SimulationResult:
     final_state: np.ndarray
     amplitude: float
     t_converged: float = float("nan")
+    rest_time: float = -1.0
     t: np.ndarray | None = None
     y: np.ndarray | None = None
     settings: Settings | None = None
@@ -149,8 +157,10 @@ def simulate(
     t_end : float
         Final time (nondimensional).
     t_transient : float
-        Points, samples and the amplitude used for classification are taken
-        only for t >= t_transient.
+        Points, samples and ``amplitude`` are taken only for t >= t_transient.
+        The classification does not depend on it being long enough: it reads
+        the end of the run (see ``equilibrium_tol``), so the default 0 gives
+        correct labels, but with it the returned points include the transient.
     y0 : array_like, optional
         Initial state in ``system.state_names`` order; default zeros
         (v_b(0) = 0 for the DC motor, as in the paper).
@@ -175,9 +185,13 @@ def simulate(
         Give up with status "max-steps" after this many accepted steps.
     equilibrium_tol : float
         The run counts as at rest ("equilibrium", or "stalled" when a DC motor's
-        belt is below 1% of v_b0) when over the recording window no disk velocity
-        exceeds this and the belt speed varies by less. Default 1e-4, ten times the presets' eps: inside
-        the friction law's stick band a "stuck" disk creeps at O(eps).
+        belt is below 1% of v_b0) when, over its last ``dwell`` time units (or
+        the whole recording window if that is shorter), no disk velocity
+        exceeds this and the belt speed varies by less. A run at rest at its
+        end for less than that is "unsettled" (never an orbit: its crossings
+        would be round-off minima of x1 at rest). Motion that died out earlier
+        never counts. Default 1e-4, ten times the presets' eps: inside the
+        friction law's stick band a "stuck" disk creeps at O(eps).
     period_tol : float, optional
         Relative tolerance of the period detector (default 1e4 rtol).
     stop : {"fixed", "converged"}
@@ -190,8 +204,10 @@ def simulate(
         more points (at most ``max_points``), which are the ones returned.
         ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
     dwell : float, optional
-        Converged stopping: time at rest before a run ends as an equilibrium
-        (default 200, about 15 periods of the slowest free oscillation).
+        Time at rest at the end of the run that makes it an equilibrium (see
+        ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
+        after which the run ends (default 200, about 15 periods of the slowest
+        free oscillation).
 
     Returns
     -------
@@ -270,6 +286,7 @@ def simulate(
         final_state=y_end,
         amplitude=float(stat_f[F_AMPLITUDE]),
         t_converged=float(stat_f[F_T_CONVERGED]),
+        rest_time=float(stat_f[F_REST_TIME]),
         t=t,
         y=y,
         settings=s,
