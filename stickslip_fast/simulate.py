@@ -83,8 +83,8 @@ class SimulationResult:
         Time reached (t_end unless the run failed).
     final_state : ndarray, shape (n_state,)
     amplitude : float
-        Distance from rest over the recording window: the largest |dx_i| or
-        |dphi_i|, or the range of v_b. At rest when below ``equilibrium_tol``.
+        Distance from rest over the recording window: the largest ``|dx_i|`` or
+        ``|dphi_i|``, or the range of v_b. At rest when below ``equilibrium_tol``.
     t_converged : float
         With ``stop="converged"``: when the run was found converged (NaN if it
         reached t_end first, and always with ``stop="fixed"``).
