@@ -27,13 +27,13 @@ print(diag.summary())
 # %%
 # ``diag.points`` holds every value's points, NaN-padded to a common length;
 # ``diag.period`` the period found (0 for none within the recorded points), and
-# ``diag.status`` why a value gave no orbit (``"equilibrium"``: the disk slides
-# steadily at rest relative to nothing but the belt).
+# ``diag.status`` why a value gave no orbit (``"equilibrium"``: steady sliding,
+# the disk at rest while the belt slips under it).
 
 x1 = diag.points[:, :, 0]
 fig, (ax0, ax1) = plt.subplots(2, 1, figsize=(8, 5), sharex=True, layout="constrained",
                                height_ratios=(3, 1))  # fmt: skip
-ax0.plot(np.repeat(eta, x1.shape[1]), x1.ravel(), ",k", marker=".", ms=1.5, ls="none")
+ax0.plot(np.repeat(eta, x1.shape[1]), x1.ravel(), ".k", ms=1.5)
 ax0.set(ylabel="x₁ at the minima of x₁")
 ax1.step(eta, diag.period, where="mid")
 ax1.set(xlabel="η", ylabel="period")

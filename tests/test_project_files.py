@@ -63,3 +63,31 @@ def test_one_version_everywhere():
     assert cff.strip("\"'") == pyproject
     assert "MIT License" in _read("LICENSE")
     assert "## [" + pyproject + "]" in _read("CHANGELOG.md")
+
+
+def test_docstring_examples_of_the_public_names_run():
+    # the rendered API reference shows these examples; they must stay true
+    import doctest
+
+    finder = doctest.DocTestFinder()
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    n_examples = 0
+    for name in ssf.__all__:
+        obj = getattr(ssf, name)
+        if not (callable(obj) and getattr(obj, "__module__", "").startswith("stickslip_fast")):
+            continue
+        for test in finder.find(obj, name, globs={"np": __import__("numpy"), "ssf": ssf}):
+            test.globs.update(vars(ssf))
+            n_examples += len(test.examples)
+            runner.run(test)
+    assert runner.failures == 0, f"{runner.failures} docstring example(s) failed (see output)"
+    assert n_examples >= 5
+
+
+def test_the_period_map_config_loads():
+    # the README's period-map picture is made from it (its notes say how)
+    from stickslip_fast.config import load_config
+
+    cfg = load_config(os.path.join(ROOT, "data", "maps", "period_map_eta_k12.toml"))
+    assert tuple(cfg.sweep["param"]) == ("eta", "k12")
+    assert os.path.exists(os.path.join(ROOT, "docs", "figures", "period_map.png"))
