@@ -225,7 +225,7 @@ class LyapunovResult:
     Attributes
     ----------
     exponent : float
-        Largest Lyapunov exponent (Benettin): log(|u(t_final)| / |u(t_start)|)
+        Largest Lyapunov exponent (Benettin): ``log(|u(t_final)| / |u(t_start)|)``
         / (t_final - t_start), NaN if the run failed before t_transient.
     exponent_fit : float
         Least-squares slope of the cumulative log growth L(t) over the
@@ -283,7 +283,7 @@ def largest_lyapunov(
 
     Integrates y' = f(y) and u' = J(y) u with the analytic Jacobian, using a
     compiled Rodas5P kernel on the augmented autonomous system, and averages
-    the log growth of |u| over [t_transient, t_end].
+    the log growth of ``|u|`` over [t_transient, t_end].
 
     Parameters
     ----------
@@ -303,7 +303,7 @@ def largest_lyapunov(
         Initial tangent vector; default a fixed pseudo-random unit vector
         (seed 12345), which has components along every direction.
     tangent_atol : float
-        Absolute tolerance of the tangent part relative to |u| (default 1e-8:
+        Absolute tolerance of the tangent part relative to ``|u|`` (default 1e-8:
         on the presets the exponent agrees with 1e-10 to ~1e-6 at a third fewer
         steps).
     max_steps : int
@@ -317,7 +317,7 @@ def largest_lyapunov(
     -----
     For a periodic orbit of an autonomous system the largest exponent is 0
     (the flow direction neither grows nor shrinks on average); the finite-time
-    estimate carries a bias of order log(|f(y_end)| / |f(y_start)|) / (t_end -
+    estimate carries a bias of order ``log(|f(y_end)| / |f(y_start)|)`` / (t_end -
     t_start), which decays like 1 / t_end.
 
     Examples

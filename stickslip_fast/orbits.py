@@ -119,7 +119,7 @@ class Orbit:
     jacobian : ndarray, shape (n_state - 1, n_state - 1)
         D P^p at ``points[0]`` in section coordinates (the state without dx1).
     residual : float
-        max |P^p(z) - z| over the section coordinates at ``points[0]``.
+        ``max |P^p(z) - z|`` over the section coordinates at ``points[0]``.
     iterations : int
         Newton steps taken.
     converged : bool
@@ -174,7 +174,7 @@ class Equilibrium:
         "sliding" (constant belt, or a DC belt running above 1% of v_b0) or
         "stall" (a DC belt below 1% of v_b0).
     residual : float
-        max |f(state)|.
+        ``max |f(state)|``.
     iterations : int
     converged : bool
     """
@@ -434,7 +434,7 @@ def find_orbit(
         SimulationResult's or attractor's period, or, for a state, the period a
         converged simulation from it finds.
     tol : float
-        Convergence: max |P^p(z) - z| <= tol over the section coordinates.
+        Convergence: ``max |P^p(z) - z|`` <= tol over the section coordinates.
     max_iter : int
         Most Newton steps.
     rtol, atol : float
@@ -667,9 +667,9 @@ def find_equilibrium(
         when beta times the friction peak exceeds about v_b0). The springs then
         balance the sliding friction. Or a state to start Newton from.
     tol : float
-        Convergence: max |f(y)| <= tol.
+        Convergence: ``max |f(y)|`` <= tol.
     max_iter : int
-        Most Newton steps (each halved until |f| decreases).
+        Most Newton steps (each halved until ``|f|`` decreases).
 
     Returns
     -------

@@ -85,8 +85,8 @@ class SimulationResult:
         Time reached (t_end unless the run failed).
     final_state : ndarray, shape (n_state,)
     amplitude : float
-        Distance from rest over the recording window: the largest |dx_i| or
-        |dphi_i|, or the range of v_b (informative; the status is judged on
+        Distance from rest over the recording window: the largest ``|dx_i|`` or
+        ``|dphi_i|``, or the range of v_b (informative; the status is judged on
         the end of the run, see :func:`simulate`'s ``equilibrium_tol``).
     t_converged : float
         With ``stop="converged"``: when the run was found converged (NaN if it
