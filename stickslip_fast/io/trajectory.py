@@ -197,7 +197,7 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
         t_final=float(attrs["t_final"]),
         final_state=data["final_state"],
         amplitude=float(attrs["amplitude"]),
-        rest_time=float(attrs.get("rest_time", -1.0)),  # files before schema 2.1 lack it
+        rest_time=float(attrs.get("rest_time", -1.0)),  # files of 0.1.0 lack it
         t=data["t"],
         y=data["y"],
         settings=Settings.from_dict(config["settings"]),
