@@ -272,7 +272,7 @@ def plot_period_map(data: dict[str, Any], title: str | None = None) -> plt.Figur
     cat[status == "missing"] = 5
     cat_colours = ["black", "0.7", "tab:red", "magenta", "white"]
     cat_labels = ["orbit, no period <= 64", "steady sliding (equilibrium)", "stalled motor",
-                  "failed", "not computed"]  # fmt: skip
+                  "no orbit: failed, unsettled or no crossings", "not computed"]  # fmt: skip
 
     def edges(a: np.ndarray) -> np.ndarray:
         if a.size == 1:

@@ -262,3 +262,69 @@ def test_cli_scheduler_flag_writes_the_same_file(cluster, tmp_path):
     assert main(["sweep", str(cfg), "-o", str(tmp_path / "d.h5"), "--quiet",
                  "--scheduler", address]) == 0  # fmt: skip
     _same_files(tmp_path / "l.h5", tmp_path / "d.h5")
+
+
+_TWO_STARTS = """
+import sys, warnings
+import numpy as np
+warnings.simplefilter("ignore")
+import stickslip_fast as ssf
+
+def main():
+    asym = ssf.System.preset("asymmetric")
+    kw = dict(t_end=200.0, t_transient=100.0, max_points=8, progress=False)
+    ref = ssf.sweep(asym, "eta", [6.0, 9.0], **kw)
+    for _ in range(2):
+        res = ssf.sweep(asym, "eta", [6.0, 9.0], backend="dask", n_workers=2, **kw)
+        assert np.array_equal(res.status_code, ref.status_code)
+        assert np.array_equal(res.points, ref.points, equal_nan=True)
+    print("two-starts-ok")
+
+if __name__ == "__main__":
+    main()
+"""
+
+
+@needs_dask
+def test_local_cluster_leaves_numba_num_threads_alone():
+    # Numba raises "Cannot set NUMBA_NUM_THREADS to a different value once the
+    # threads have been launched" when that variable changes between two
+    # compilations of one process; a cluster's env was applied after a spawned
+    # worker had imported Numba, which raced with the warm-up (issue 26).
+    from stickslip_fast.backends.dask import local_cluster
+
+    with local_cluster(2) as cl:
+        for nanny in cl.workers.values():
+            assert "NUMBA_NUM_THREADS" not in nanny.env
+
+
+@needs_dask
+def test_cluster_starts_repeated_in_one_process_and_in_two_at_once(tmp_path):
+    """Own clusters started again and again, by two processes at the same time."""
+    import subprocess
+
+    script = tmp_path / "two_starts.py"
+    script.write_text(_TWO_STARTS)
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+    procs = [
+        subprocess.Popen(
+            [sys.executable, str(script)],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=tmp_path,
+        )  # fmt: skip
+        for _ in range(2)
+    ]
+    # and in this process meanwhile
+    etas = [6.0, 9.0]
+    ref = sweep(ASYM, "eta", etas, **KW)
+    for _ in range(2):
+        _same(ref, sweep(ASYM, "eta", etas, backend="dask", n_workers=2, **KW))
+    for p in procs:
+        out, err = p.communicate(timeout=600)
+        assert p.returncode == 0 and "two-starts-ok" in out, err[-3000:]
+        assert "Cannot set NUMBA_NUM_THREADS" not in err

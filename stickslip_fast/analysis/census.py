@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..base.messages import plain
 from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
 from ..io import CensusFile, CensusLayout, read_census, write_census_classification
 from ..model.system import SWEEPABLE, System
@@ -171,7 +172,7 @@ def _check_starts(system: System, n_starts, box, starts, seed, include_zero, par
     if isinstance(n_starts, bool) or not isinstance(n_starts, (int, np.integer)) or n_starts < 1:
         raise ValueError(f"n_starts must be an integer >= 1, got {n_starts!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+        raise ValueError(f"seed must be an integer >= 0, got {plain(seed)}")
     if box is None:
         box_arr = default_box(system, param, values)
     else:
@@ -198,7 +199,7 @@ def census(
     starts=None,
     seed: int = 0,
     include_zero: bool = True,
-    stop: str = "fixed",
+    stop: str = "converged",
     out: str | Path | None = None,
     threads: int | None = None,
     backend: str = "local",
@@ -247,11 +248,14 @@ def census(
         Seed of the sampler.
     include_zero : bool
         Make start 0 the zero state (the paper's initial condition).
-    stop : {"fixed", "converged"}
-        Stop rule of every run, as for :func:`simulate`: "fixed" integrates to
-        ``t_end``; "converged" ends a run once its Poincare points repeat or it
-        has come to rest (``t_end`` is the cap), and stores each run's
-        ``t_converged``.
+    stop : {"converged", "fixed"}
+        Stop rule of every run, as for :func:`simulate`: "converged" (the
+        default) ends a run once its Poincare points repeat or it has come to
+        rest (``t_end`` is the cap), records only points after that, and
+        stores each run's ``t_converged``; "fixed" integrates to ``t_end``.
+        Converged stopping is the default because the census groups runs by
+        their points: with "fixed" and ``t_transient = 0`` a run's points
+        include its transient, and each run costs the full ``t_end``.
     out : path, optional
         HDF5 file to stream into (docs/file-format.md, census file); running
         the same census on it again resumes, a different one is refused.
@@ -264,7 +268,7 @@ def census(
         file is all-CPU or all-GPU (the backend is part of its configuration).
     method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol, dwell
         As for :func:`sweep`; ``max_points`` defaults to 128 (enough to
-        detect any period <= 64); ``dwell`` only with ``stop="converged"``.
+        detect any period <= 64).
     identity_tol, track_threshold : float
         See :func:`classify_census`; they do not change the runs, so a finished
         file can be re-classified with other values (:func:`load_census`).
@@ -358,7 +362,7 @@ def _check_census_args(
         try:
             system.replace(**{param: float(v)})
         except ValueError as exc:
-            raise ValueError(f"value {v!r} of param {param!r} is invalid: {exc}") from None
+            raise ValueError(f"value {plain(v)} of param {param!r} is invalid: {exc}") from None
     if stop not in STOP_RULES:
         raise ValueError(f"stop must be one of {STOP_RULES}, got {stop!r}")
     if backend not in _BACKENDS:
@@ -366,7 +370,7 @@ def _check_census_args(
     if backend != "dask" and (scheduler is not None or n_workers is not None):
         raise ValueError("scheduler and n_workers are only used with backend='dask'")
     if track_threshold is None or not np.isfinite(track_threshold) or track_threshold <= 0:
-        raise ValueError(f"track_threshold must be a number > 0, got {track_threshold!r}")
+        raise ValueError(f"track_threshold must be a number > 0, got {plain(track_threshold)}")
     if identity_tol is not None and (not np.isfinite(identity_tol) or identity_tol <= 0):
         raise ValueError(f"identity_tol must be a number > 0, got {identity_tol!r}")
     return vals
@@ -417,7 +421,7 @@ def _census_chunk_size(chunk_size, backend, runner, nthreads) -> int:
             backend, getattr(runner, "default_chunk_size", 64)
         )
     elif isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
-        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
+        raise ValueError(f"chunk_size must be an integer >= 1, got {plain(chunk_size)}")
     return chunk_size
 
 

@@ -30,6 +30,7 @@ from numba.extending import overload
 
 from ..base.interrupt import call_interruptible, new_abort_flag
 from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.messages import plain
 from ..base.status import ST_ERROR, STATUS_NAMES
 from ..core.driver import (
     OBS_FAIL,
@@ -225,7 +226,7 @@ class LyapunovResult:
     Attributes
     ----------
     exponent : float
-        Largest Lyapunov exponent (Benettin): log(|u(t_final)| / |u(t_start)|)
+        Largest Lyapunov exponent (Benettin): ``log(|u(t_final)| / |u(t_start)|)``
         / (t_final - t_start), NaN if the run failed before t_transient.
     exponent_fit : float
         Least-squares slope of the cumulative log growth L(t) over the
@@ -283,7 +284,7 @@ def largest_lyapunov(
 
     Integrates y' = f(y) and u' = J(y) u with the analytic Jacobian, using a
     compiled Rodas5P kernel on the augmented autonomous system, and averages
-    the log growth of |u| over [t_transient, t_end].
+    the log growth of ``|u|`` over [t_transient, t_end].
 
     Parameters
     ----------
@@ -303,7 +304,7 @@ def largest_lyapunov(
         Initial tangent vector; default a fixed pseudo-random unit vector
         (seed 12345), which has components along every direction.
     tangent_atol : float
-        Absolute tolerance of the tangent part relative to |u| (default 1e-8:
+        Absolute tolerance of the tangent part relative to ``|u|`` (default 1e-8:
         on the presets the exponent agrees with 1e-10 to ~1e-6 at a third fewer
         steps).
     max_steps : int
@@ -317,7 +318,7 @@ def largest_lyapunov(
     -----
     For a periodic orbit of an autonomous system the largest exponent is 0
     (the flow direction neither grows nor shrinks on average); the finite-time
-    estimate carries a bias of order log(|f(y_end)| / |f(y_start)|) / (t_end -
+    estimate carries a bias of order ``log(|f(y_end)| / |f(y_start)|)`` / (t_end -
     t_start), which decays like 1 / t_end.
 
     Examples
@@ -331,12 +332,12 @@ def largest_lyapunov(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("renorm_dt", renorm_dt)):
         if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+            raise ValueError(f"{name} must be finite and > 0, got {plain(value)}")
     if not (math.isfinite(t_transient) and 0 <= t_transient < t_end):
-        raise ValueError(f"t_transient must be in [0, t_end), got {t_transient!r}")
+        raise ValueError(f"t_transient must be in [0, t_end), got {plain(t_transient)}")
     tangent_atol = float(tangent_atol)
     if not (math.isfinite(tangent_atol) and tangent_atol > 0):
-        raise ValueError(f"tangent_atol must be finite and > 0, got {tangent_atol!r}")
+        raise ValueError(f"tangent_atol must be finite and > 0, got {plain(tangent_atol)}")
     y_init = system.initial_state(y0)
     n = system.n_state
     if u0 is None:

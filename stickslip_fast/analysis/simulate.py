@@ -23,6 +23,7 @@ from ..core.settings import (
 )
 from ..core.trajectory import (
     F_AMPLITUDE,
+    F_REST_TIME,
     F_T_CONVERGED,
     F_T_FINAL,
     I_CROSSINGS,
@@ -70,7 +71,7 @@ def simulate(
     max_steps: int | None = None,
     equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
     period_tol: float | None = None,
-    stop: str = "fixed",
+    stop: str = "converged",
     dwell: float | None = None,
 ) -> SimulationResult:
     """Integrate one trajectory and record its Poincare points.
@@ -81,8 +82,10 @@ def simulate(
     t_end : float
         Final time (nondimensional).
     t_transient : float
-        Points, samples and the amplitude used for classification are taken
-        only for t >= t_transient.
+        Points, samples and ``amplitude`` are taken only for t >= t_transient.
+        The classification does not depend on it being long enough: it reads
+        the end of the run (see ``equilibrium_tol``), so the default 0 gives
+        correct labels, but with it the returned points include the transient.
     y0 : array_like, optional
         Initial state in ``system.state_names`` order; default zeros
         (v_b(0) = 0 for the DC motor, as in the paper).
@@ -107,9 +110,13 @@ def simulate(
         Give up with status "max-steps" after this many accepted steps.
     equilibrium_tol : float
         The run counts as at rest ("equilibrium", or "stalled" when a DC motor's
-        belt is below 1% of v_b0) when over the recording window no disk velocity
-        exceeds this and the belt speed varies by less. Default 1e-4, ten times the presets' eps: inside
-        the friction law's stick band a "stuck" disk creeps at O(eps).
+        belt is below 1% of v_b0) when, over its last ``dwell`` time units (or
+        the whole recording window if that is shorter), no disk velocity
+        exceeds this and the belt speed varies by less. A run at rest at its
+        end for less than that is "unsettled" (never an orbit: its crossings
+        would be round-off minima of x1 at rest). Motion that died out earlier
+        never counts. Default 1e-4, ten times the presets' eps: inside the
+        friction law's stick band a "stuck" disk creeps at O(eps).
     period_tol : float, optional
         Relative tolerance of the period detector (default 1e4 rtol).
     stop : {"fixed", "converged"}
@@ -122,8 +129,10 @@ def simulate(
         more points (at most ``max_points``), which are the ones returned.
         ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
     dwell : float, optional
-        Converged stopping: time at rest before a run ends as an equilibrium
-        (default 200, about 15 periods of the slowest free oscillation).
+        Time at rest at the end of the run that makes it an equilibrium (see
+        ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
+        after which the run ends (default 200, about 15 periods of the slowest
+        free oscillation).
 
     Returns
     -------
@@ -238,6 +247,7 @@ def _result(
         final_state=b.y_end,
         amplitude=float(stat_f[F_AMPLITUDE]),
         t_converged=float(stat_f[F_T_CONVERGED]),
+        rest_time=float(stat_f[F_REST_TIME]),
         t=t,
         y=y,
         settings=s,

@@ -33,6 +33,7 @@ from ..backends.local import (
     unit_starts,
     write_unit,
 )
+from ..base.messages import plain
 from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings, check_memory
 from ..io import ANALYSES, PER_VALUE_FIELDS, MemoryStore, SweepFile, SweepLayout
 from ..model.system import SWEEPABLE, System
@@ -89,7 +90,7 @@ def _check_axis(system: System, name: str, vals: Any) -> np.ndarray:
             "(n_oscillators and drive change the state layout)"
         )
     if isinstance(vals, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in vals):
-        raise ValueError(f"values for {name!r} must be numbers, got a boolean in {vals!r}")
+        raise ValueError(f"values for {name!r} must be numbers, got a boolean in {plain(vals)}")
     arr = np.asarray(vals)
     if arr.dtype.kind not in "iuf":  # strings, booleans, objects: not silently converted
         raise ValueError(f"values for {name!r} must be numbers, got an array of {arr.dtype}")
@@ -102,7 +103,9 @@ def _check_axis(system: System, name: str, vals: Any) -> np.ndarray:
         try:
             system.replace(**{name: v})
         except ValueError as exc:
-            raise ValueError(f"value {v!r} of swept param {name!r} is invalid: {exc}") from None
+            raise ValueError(
+                f"value {plain(v)} of swept param {name!r} is invalid: {exc}"
+            ) from None
     return arr
 
 
@@ -217,7 +220,7 @@ def _check_chunk_size(chunk_size) -> None:
     if chunk_size is not None and (
         isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1
     ):
-        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
+        raise ValueError(f"chunk_size must be an integer >= 1, got {plain(chunk_size)}")
 
 
 def _check_sweep_memory(plan: _Plan, in_memory: bool, chunk_size: int, threads: int) -> None:
@@ -244,7 +247,7 @@ def _numba_threads(threads: int | None):
         yield numba.get_num_threads()
         return
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
-        raise ValueError(f"threads must be an integer >= 1, got {threads!r}")
+        raise ValueError(f"threads must be an integer >= 1, got {plain(threads)}")
     if threads > numba.config.NUMBA_NUM_THREADS:
         raise ValueError(
             f"threads={threads} exceeds the {numba.config.NUMBA_NUM_THREADS} available"
@@ -363,7 +366,7 @@ def sweep(
     title: str = "",
     notes: str = "",
     analyses: Sequence[str] = (),
-    stop: str = "fixed",
+    stop: str = "converged",
     dwell: float | None = None,
 ) -> SweepResult:
     """Sweep one or two System fields and record the Poincare points of every value.

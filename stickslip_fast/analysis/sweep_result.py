@@ -116,9 +116,15 @@ def warn_no_orbit(result: SweepResult, names, axes, branches) -> None:
     if len(axes) == 1 and not branches:
         vals = axes[0][bad][:5]
         example = f" (e.g. {names[0]} = {', '.join(f'{v:g}' for v in vals)})"
+    hint = ""
+    if "unsettled" in counts:
+        hint = (
+            " 'unsettled' runs came to rest less than `dwell` before t_end, too late to"
+            " tell: run longer, or use stop='converged'."
+        )
     warnings.warn(
         f"{int(bad.sum())} of {status.size} values gave no orbit: {detail}{example}. "
-        "Their points are NaN; see result.status.",
+        f"Their points are NaN; see result.status.{hint}",
         UserWarning,
         stacklevel=3,
     )

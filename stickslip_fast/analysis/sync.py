@@ -83,14 +83,14 @@ class SyncResult:
     mean_diff : ndarray, shape (N,)
         Circular mean of each row of ``phase_diff``.
     spread : ndarray, shape (N,)
-        Largest |wrap(phase_diff - mean_diff)| of each row (drift / locking test).
+        Largest ``|wrap(phase_diff - mean_diff)|`` of each row (drift / locking test).
     labels : list of str
         Per oscillator (index 0 is oscillator 1, "reference").
     classification : str
         "in-phase" or "anti-phase" if every other oscillator is, else
         "desynchronized" (also for mixed labels with N > 2: "mixed").
     order_parameter : float
-        Kuramoto R = time average of |mean_i exp(i theta_i)| over ``t``.
+        Kuramoto R = time average of ``|mean_i exp(i theta_i)|`` over ``t``.
     """
 
     events: list
@@ -127,8 +127,8 @@ def phases_from_events(
     n_oscillators : int
         Number of disks N.
     tol : float
-        Tolerance in radians: "in-phase" if |mean diff| < tol, "anti-phase" if
-        |mean diff - pi| < tol, in both cases only if the differences stay
+        Tolerance in radians: "in-phase" if ``|mean diff|`` < tol, "anti-phase" if
+        ``|mean diff - pi|`` < tol, in both cases only if the differences stay
         within ``tol`` of their mean (locked); otherwise "desynchronized".
 
     Returns

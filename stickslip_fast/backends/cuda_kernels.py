@@ -63,7 +63,6 @@ from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
     float64,
     int64,
     jacobian_blocks,
-    motion_measure,
     rhs,
     ring_period,
     simulator_enabled,
@@ -271,8 +270,24 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
         # converged stopping (driver.converged_stop, operation for operation)
         phase = 0  # 1: converged, recording the last points
         rest_since = math.nan
+        d1_rest_since = math.nan
+        last_cross = math.nan
         checked = -1
         target = 0
+        if not converged:  # a start at rest is at rest from t = 0, as driver._reset_stop
+            at_rest0 = True
+            for i in range(N_OSC):
+                if not (
+                    abs(y[4 * i + 1]) <= equilibrium_tol and abs(y[4 * i + 3]) <= equilibrium_tol
+                ):
+                    at_rest0 = False
+            if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
+                d1_rest_since = 0.0
+            if at_rest0:
+                rest_since = 0.0
+                for i in range(NS):
+                    wmin[i] = y[i]
+                    wmax[i] = y[i]
 
         while t < t_end:
             if n_steps >= max_steps or n_rej >= max_steps:
@@ -367,6 +382,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                             pts[slot, i] = _dense_value(theta, y, ynew, D, i)
                         tpts[slot] = tc
                     n_cross += 1
+                    last_cross = t1  # the step's end, as driver.time_since_crossing
             if t1 >= t_transient:
                 for i in range(NS):
                     vv = ynew[i]
@@ -388,13 +404,12 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 h *= fac
                 err_prev = max(en, 1e-10)
                 last_rejected = False
-            if not converged:
-                continue
-            # ---- converged stopping, as driver._converged_now
-            if phase == 1:
-                if n_cross >= target:
-                    break
-                continue
+            # ---- rest, tracked always (the classification reads it), as driver._track_rest
+            if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
+                if math.isnan(d1_rest_since):
+                    d1_rest_since = t
+            else:
+                d1_rest_since = math.nan
             at_rest = True
             for i in range(N_OSC):
                 if not (
@@ -416,14 +431,21 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                         for i in range(NS):
                             wmin[i] = y[i]
                             wmax[i] = y[i]
-                if t - rest_since >= dwell:
-                    for i in range(NS):  # the recording window is the dwell window
-                        ymin[i] = wmin[i]
-                        ymax[i] = wmax[i]
-                    t_conv[v] = rest_since
-                    break
             else:
                 rest_since = math.nan
+            if not converged:
+                continue
+            # ---- converged stopping, as driver._converged_now
+            if phase == 1:
+                if n_cross >= target:
+                    break
+                continue
+            if at_rest and t - rest_since >= dwell:
+                for i in range(NS):  # the recording window is the dwell window
+                    ymin[i] = wmin[i]
+                    ymax[i] = wmax[i]
+                t_conv[v] = rest_since
+                break
             if n_cross != checked:  # repeating points: checked once per new crossing
                 checked = n_cross
                 per = ring_period(pts, n_cross, period_tol, max_period, MIN_REPEATS, MIN_POINTS)
@@ -441,10 +463,13 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
         # ---- classification, as trajectory._run / _lane_values
         for i in range(NS):
             final_state[v, i] = y[i]
-        amp = motion_measure(ymin, ymax, N_OSC, DC)
         if status == _ST_OK:
             vb_end = y[NS - 1] if DC else 0.0
-            status = classify(amp, n_cross, DC, vb_end, p[P_VB0], equilibrium_tol)
+            rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
+            tail = min(dwell, t - t_transient)  # the host passes t_transient = 0 if converged
+            d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
+            since = math.inf if math.isnan(last_cross) else t - last_cross
+            status = classify(rest_time, d1_rest, tail, since, DC, vb_end, p[P_VB0])
         count = 0
         period = 0
         if status == _ST_OK:

@@ -211,11 +211,18 @@ def local_cluster(n_workers: int | None = None, **kwargs: Any) -> Any:
     Numba kernels should use ``max(1, cores // n_workers)`` threads, so that
     workers x Numba threads does not exceed the cores: parallelism comes from
     Dask across workers, and within a task from Numba over the worker's share
-    of the cores. This function sets ``NUMBA_NUM_THREADS`` in the workers'
-    environment (which sizes Numba's pool unless the main script imported
-    Numba at top level, which spawned workers re-import first); pass the same
-    count to :func:`prepare_client`, which makes every task use it. The
+    of the cores. Pass that count to :func:`prepare_client`, which makes every
+    task use it (``numba.set_num_threads`` on the task's thread). The
     scheduler's HTTP server (and dashboard, with bokeh) takes a free port.
+
+    The workers' ``NUMBA_NUM_THREADS`` is left alone on purpose. Numba re-reads
+    it at every compilation and raises "Cannot set NUMBA_NUM_THREADS to a
+    different value once the threads have been launched" when it differs from
+    the value the thread pool was launched with. A spawned worker imports
+    Numba (with the parent's environment) before Dask applies a cluster's
+    ``env``, so setting it there raced with the warm-up's first compilation
+    (about one two-worker cluster in six on a loaded 2-core machine). The
+    pool keeps Numba's default size; the idle threads cost nothing.
 
     Parameters
     ----------
@@ -229,10 +236,9 @@ def local_cluster(n_workers: int | None = None, **kwargs: Any) -> Any:
     distributed.LocalCluster
     """
     distributed = _require_distributed()
-    n, threads = _local_shape(n_workers)
-    env = {"NUMBA_NUM_THREADS": str(threads)}
+    n, _threads = _local_shape(n_workers)
     options: dict[str, Any] = dict(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", env=env
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0"
     )
     options.update(kwargs)
     return distributed.LocalCluster(**options)

@@ -18,6 +18,7 @@ STATUS_NAMES = (
     "max-steps",
     "error",
     "interrupted",
+    "unsettled",
 )
 (
     ST_OK,
@@ -29,7 +30,8 @@ STATUS_NAMES = (
     ST_MAX_STEPS,
     ST_ERROR,
     ST_INTERRUPTED,
-) = range(9)
+    ST_UNSETTLED,
+) = range(10)
 #: Written into kernel outputs before a value runs: a value that still holds it
 #: afterwards was never computed, and the caller refuses to store it.
 ST_NOT_COMPUTED = -1

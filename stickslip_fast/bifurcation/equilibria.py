@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.messages import plain
 from ..model.equations import dense_jacobian, friction
 from ..model.params import eta_prime
 from ..model.system import System
@@ -34,7 +35,7 @@ class Equilibrium:
         "sliding" (constant belt, or a DC belt running above 1% of v_b0) or
         "stall" (a DC belt below 1% of v_b0).
     residual : float
-        max |f(state)|.
+        ``max |f(state)|``.
     iterations : int
     converged : bool
     """
@@ -125,9 +126,9 @@ def find_equilibrium(
         when beta times the friction peak exceeds about v_b0). The springs then
         balance the sliding friction. Or a state to start Newton from.
     tol : float
-        Convergence: max |f(y)| <= tol.
+        Convergence: ``max |f(y)|`` <= tol.
     max_iter : int
-        Most Newton steps (each halved until |f| decreases).
+        Most Newton steps (each halved until ``|f|`` decreases).
 
     Returns
     -------
@@ -143,14 +144,14 @@ def find_equilibrium(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if isinstance(start, str):
         if start not in ("sliding", "stall"):
-            raise ValueError(f'start must be "sliding", "stall" or a state, got {start!r}')
+            raise ValueError(f'start must be "sliding", "stall" or a state, got {plain(start)}')
         if start == "stall" and not system.is_dc_motor:
             raise ValueError('start="stall" needs a DC-motor drive (drive="dc-motor")')
         y = _sliding_guess(system, _belt_speed(system, start))
     else:
         y = _finite_state("start", start, system.n_state)
     if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a finite number > 0, got {tol!r}")
+        raise ValueError(f"tol must be a finite number > 0, got {plain(tol)}")
     p = system.to_array()
     nosc, dc = system.n_oscillators, system.is_dc_motor
     f = _field(system, y)

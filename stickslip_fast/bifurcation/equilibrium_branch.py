@@ -48,7 +48,7 @@ def continue_equilibrium(
     param, bounds, ds, ds_min, ds_max, max_points, direction
         As for :func:`continue_orbit` (arclength in the full state and the parameter).
     tol : float
-        Corrector tolerance on max |f(y)|.
+        Corrector tolerance on ``max |f(y)|``.
     fd_step : float
         Relative step of the central difference df/dlambda (one-sided at the
         edge of the parameter's valid range, e.g. eta = 1 or 10).

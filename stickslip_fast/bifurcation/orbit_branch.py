@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.messages import plain
 from ..model.system import SWEEPABLE
 from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
@@ -61,13 +62,13 @@ def _check_args(system, what, param, bounds, ds, ds_min, ds_max, tol, max_points
     try:
         lo, hi = (float(v) for v in bounds)
     except (TypeError, ValueError):
-        raise ValueError(f"bounds must be two numbers (lo, hi), got {bounds!r}") from None
+        raise ValueError(f"bounds must be two numbers (lo, hi), got {plain(bounds)}") from None
     lam0 = float(getattr(system, param))
     if not (math.isfinite(lo) and math.isfinite(hi) and lo <= lam0 <= hi):
-        raise ValueError(f"bounds {bounds!r} must contain the {what}'s {param} = {lam0}")
+        raise ValueError(f"bounds {plain(bounds)} must contain the {what}'s {param} = {lam0}")
     for name, v in (("ds", ds), ("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+            raise ValueError(f"{name} must be a finite number > 0, got {plain(v)}")
     if not ds_min <= ds <= ds_max:
         raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
     if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
@@ -173,7 +174,7 @@ def continue_orbit(
     direction : float
         +1: start towards increasing ``param``; -1: decreasing.
     tol : float
-        Corrector tolerance on max |P^p(z) - z|.
+        Corrector tolerance on ``max |P^p(z) - z|``.
     rtol, atol : float
         Integration tolerances of the return map.
     fd_step : float

@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis.simulate import SimulationResult, simulate
+from ..base.messages import plain
 from ..model.system import System
 from .equilibria import (  # noqa: F401
     EQUILIBRIUM_SPEED,
@@ -123,7 +124,7 @@ class Orbit:
     jacobian : ndarray, shape (n_state - 1, n_state - 1)
         D P^p at ``points[0]`` in section coordinates (the state without dx1).
     residual : float
-        max |P^p(z) - z| over the section coordinates at ``points[0]``.
+        ``max |P^p(z) - z|`` over the section coordinates at ``points[0]``.
     iterations : int
         Newton steps taken.
     converged : bool
@@ -240,7 +241,7 @@ def find_orbit(
         SimulationResult's or attractor's period, or, for a state, the period a
         converged simulation from it finds.
     tol : float
-        Convergence: max |P^p(z) - z| <= tol over the section coordinates.
+        Convergence: ``max |P^p(z) - z|`` <= tol over the section coordinates.
     max_iter : int
         Most Newton steps.
     rtol, atol : float
@@ -284,14 +285,14 @@ def find_orbit(
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if period is not None:
         if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or period < 1:
-            raise ValueError(f"period must be an integer >= 1, got {period!r}")
+            raise ValueError(f"period must be an integer >= 1, got {plain(period)}")
         period = int(period)
     for name, v in (
         ("tol", tol), ("rtol", rtol), ("atol", atol), ("t_max", t_max),
         ("tangent_atol", tangent_atol),
     ):  # fmt: skip
         if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
+            raise ValueError(f"{name} must be a finite number > 0, got {plain(v)}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
         raise ValueError(f"max_iter must be an integer >= 0, got {max_iter!r}")
     z, period = _start_from(system, start, period, t_max)

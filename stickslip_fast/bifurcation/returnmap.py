@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..base.interrupt import call_interruptible, new_abort_flag
+from ..base.messages import plain
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
 from ..core.variational import propagate_sensitivity, propagate_tangents
@@ -168,7 +169,7 @@ def _sensitivity_params(system: System, param: str | None, rel_step: float):
     if param not in SWEEPABLE:
         raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
     if not (isinstance(rel_step, (int, float)) and 0 < rel_step < 1e-2):
-        raise ValueError(f"param_step must be a number in (0, 0.01), got {rel_step!r}")
+        raise ValueError(f"param_step must be a number in (0, 0.01), got {plain(rel_step)}")
     lam = float(getattr(system, param))
     h = rel_step * max(1.0, abs(lam))
 

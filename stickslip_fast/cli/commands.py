@@ -1,4 +1,4 @@
-"""Command line: ``stickslip-fast simulate | sweep | census | continue | info``.
+"""Command line: ``stickslip-fast simulate | sweep | census | continue | info`` (and ``--version``).
 
 A thin layer over the public API: it parses a TOML config (see
 :mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
@@ -211,6 +211,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="stickslip-fast",
         description="Bifurcation engine for coupled translational-rotational stick-slip oscillators.",
     )
+    from .. import __version__  # one source: the installed metadata (pyproject.toml's version)
+
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("simulate", help="one trajectory: Poincare points and period")
     _add_common(p)

@@ -68,6 +68,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.messages import plain
 from ..core.settings import Settings
 from ..model.system import SWEEPABLE, System
 
@@ -153,25 +154,25 @@ def _values_from_spec(spec: Any, key: str) -> np.ndarray:
             )
         num = spec["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-            raise ConfigError(f"{key}.num must be an integer >= 1, got {num!r}")
+            raise ConfigError(f"{key}.num must be an integer >= 1, got {plain(num)}")
         for end in ("start", "stop"):
             v = spec[end]
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(f"{key}.{end} must be a number, got {v!r}")
+                raise ConfigError(f"{key}.{end} must be a number, got {plain(v)}")
         return np.linspace(float(spec["start"]), float(spec["stop"]), num)
     if isinstance(spec, list) and spec:
         for i, v in enumerate(spec):  # no "3.0" -> 3.0 or true -> 1.0 conversions
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(f"{key} must hold numbers, but {key}[{i}] is {v!r}")
+                raise ConfigError(f"{key} must hold numbers, but {key}[{i}] is {plain(v)}")
         return np.asarray(spec, dtype=float)
-    raise ConfigError(f"{key} must be a non-empty list or {{start, stop, num}}, got {spec!r}")
+    raise ConfigError(f"{key} must be a non-empty list or {{start, stop, num}}, got {plain(spec)}")
 
 
 def _analyses(value: Any) -> tuple[str, ...]:
     from ..io import ANALYSES
 
     if not isinstance(value, list) or not all(isinstance(a, str) for a in value):
-        raise ConfigError(f"[sweep].analyses must be a list of names, got {value!r}")
+        raise ConfigError(f"[sweep].analyses must be a list of names, got {plain(value)}")
     unknown = [a for a in value if a not in ANALYSES]
     if unknown:
         raise ConfigError(f"[sweep].analyses: unknown {unknown}; choose from {sorted(ANALYSES)}")
@@ -217,7 +218,7 @@ def _check_sections(data: dict[str, Any]) -> None:
         if allowed is not None:
             if not isinstance(value, dict):
                 raise ConfigError(
-                    f"{section!r} must be a table ([{section}] with its keys), got {value!r}"
+                    f"{section!r} must be a table ([{section}] with its keys), got {plain(value)}"
                 )
             unknown = sorted(set(value) - allowed)
             if unknown:
@@ -273,7 +274,7 @@ def _parse_integration(data: dict[str, Any]) -> dict[str, Any]:
     for key, value in integration.items():
         kind, types = _TOML_TYPES[_SETTING_TYPES[key]]
         if isinstance(value, bool) or not isinstance(value, types):
-            raise ConfigError(f"[integration].{key} must be {kind}, got {value!r}")
+            raise ConfigError(f"[integration].{key} must be {kind}, got {plain(value)}")
     return integration
 
 
@@ -283,7 +284,7 @@ def _parse_sample_dt(data: dict[str, Any]) -> float | int | None:
     if sample_dt is not None and (
         isinstance(sample_dt, bool) or not isinstance(sample_dt, (int, float)) or sample_dt <= 0
     ):
-        raise ConfigError(f"[simulate].sample_dt must be a number > 0, got {sample_dt!r}")
+        raise ConfigError(f"[simulate].sample_dt must be a number > 0, got {plain(sample_dt)}")
     return sample_dt
 
 
@@ -342,13 +343,13 @@ def _parse_census(table: dict[str, Any]) -> dict[str, Any]:
         if key in sw:
             v = sw[key]
             if isinstance(v, bool) or not isinstance(v, int):
-                raise ConfigError(f"[census].{key} must be an integer, got {v!r}")
+                raise ConfigError(f"[census].{key} must be an integer, got {plain(v)}")
             out[key] = v
     for key in ("identity_tol", "track_threshold"):
         if key in sw:
             v = sw[key]
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(f"[census].{key} must be a number, got {v!r}")
+                raise ConfigError(f"[census].{key} must be a number, got {plain(v)}")
             out[key] = float(v)
     if "include_zero" in sw:
         if not isinstance(sw["include_zero"], bool):
@@ -397,7 +398,7 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
         if key in table:
             v = table[key]
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ConfigError(f"[continue].{key} must be an integer >= 1, got {v!r}")
+                raise ConfigError(f"[continue].{key} must be an integer >= 1, got {plain(v)}")
             out[key] = v
     if "direction" in table:
         d = table["direction"]
@@ -408,7 +409,7 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
         if key in table:
             v = table[key]
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
-                raise ConfigError(f"[continue].{key} must be a number > 0, got {v!r}")
+                raise ConfigError(f"[continue].{key} must be a number > 0, got {plain(v)}")
             out[key] = float(v)
     if "switch" in table:
         if not isinstance(table["switch"], bool):
@@ -419,7 +420,7 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
     if "sharp_ends" in table:
         v = table["sharp_ends"]
         if not isinstance(v, bool):
-            raise ConfigError(f"[continue].sharp_ends must be true or false, got {v!r}")
+            raise ConfigError(f"[continue].sharp_ends must be true or false, got {plain(v)}")
         if out.get("start", "orbit") != "orbit":
             raise ConfigError("[continue].sharp_ends applies to start = 'orbit' only")
         out["sharp_ends"] = v

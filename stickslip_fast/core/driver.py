@@ -64,6 +64,10 @@ __all__ = [
     "StopRule",
     "STOP_AT_END",
     "STOP_AFTER_CROSSINGS",
+    "fixed_stop",
+    "rest_time",
+    "disk1_rest_time",
+    "time_since_crossing",
     "OBS_MODIFIED",
     "OBS_FAIL",
     "drive",
@@ -113,7 +117,11 @@ STOP_AFTER_CROSSINGS = 1
 STOP_CONVERGED = 2
 # slots of StopRule.state
 S_PHASE, S_T_CONVERGED, S_REST_SINCE, S_CHECKED, S_TARGET, S_PERIOD = range(6)
-STATE_SIZE = 6
+# rules that watch the run (n_osc > 0): the crossings seen, and the step end of the last one
+S_N_SEEN, S_LAST_CROSSING = 6, 7
+# ... and since when disk 1 (whose x1 minima are the section) has been at rest
+S_DISK1_REST_SINCE = 8
+STATE_SIZE = 9
 
 C_CROSS, C_SAMPLES = 0, 1
 
@@ -142,13 +150,62 @@ def converged_stop(
 
 
 @njit(**_JIT)
-def _reset_stop(stop) -> None:
+def fixed_stop(equilibrium_tol, n_osc, dc, n) -> StopRule:
+    """A STOP_AT_END rule that watches for rest (see :func:`rest_time`)."""
+    return StopRule(
+        STOP_AT_END, 0, 0.0, 0, 0, 0, equilibrium_tol, 0.0, n_osc, dc, np.empty(n), np.empty(n),
+        np.zeros(STATE_SIZE),
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def _reset_stop(stop, y) -> None:
     stop.state[S_PHASE] = 0.0
     stop.state[S_T_CONVERGED] = np.nan
     stop.state[S_REST_SINCE] = np.nan
     stop.state[S_CHECKED] = -1.0
     stop.state[S_TARGET] = 0.0
     stop.state[S_PERIOD] = 0.0
+    stop.state[S_N_SEEN] = 0.0
+    stop.state[S_LAST_CROSSING] = np.nan
+    stop.state[S_DISK1_REST_SINCE] = np.nan
+    if stop.kind == STOP_AT_END and stop.n_osc > 0:
+        _track_rest(stop, 0.0, y)  # a start at rest is at rest from t = 0
+
+
+@njit(**_JIT)
+def rest_time(stop, t: float) -> float:
+    """How long the run has been at rest at time ``t``; -1.0 if it is moving.
+
+    At rest: every disk speed |dx_i|, |dphi_i| <= ``equilibrium_tol`` and, on a
+    DC motor, the belt speed's range since then <= ``equilibrium_tol``. Tracked
+    by STOP_AT_END rules made by :func:`fixed_stop` and by STOP_CONVERGED rules
+    (those from the first step on); -1.0 for other rules.
+    """
+    return _elapsed(stop.state[S_REST_SINCE], t, -1.0)
+
+
+@njit(**_JIT)
+def disk1_rest_time(stop, t: float) -> float:
+    """As :func:`rest_time`, for disk 1 alone (|dx_1|, |dphi_1| <= ``equilibrium_tol``)."""
+    return _elapsed(stop.state[S_DISK1_REST_SINCE], t, -1.0)
+
+
+@njit(**_JIT)
+def time_since_crossing(stop, t: float) -> float:
+    """Time from the end of the step of the last recorded crossing to ``t`` (inf if none).
+
+    Tracked by the rules that :func:`rest_time` names.
+    """
+    return _elapsed(stop.state[S_LAST_CROSSING], t, np.inf)
+
+
+@njit(inline="always", **_JIT)
+def _elapsed(since: float, t: float, never: float) -> float:
+    """t - since, or ``never`` when ``since`` is unset (NaN)."""
+    if math.isnan(since):
+        return never
+    return t - since
 
 
 @njit(inline="always", **_JIT)
@@ -161,37 +218,57 @@ def _at_rest(stop, y) -> bool:
 
 
 @njit(inline="always", **_JIT)
+def _track_rest(stop, t, y) -> bool:
+    """Update the start of the current stretch at rest (``S_REST_SINCE``); True if at rest.
+
+    ``wmin``/``wmax`` hold the state's range over the stretch; on a DC motor a
+    belt speed that varies by more than ``equilibrium_tol`` restarts it.
+    """
+    st = stop.state
+    n = y.size
+    tol = stop.equilibrium_tol
+    if abs(y[1]) <= tol and abs(y[3]) <= tol:
+        if math.isnan(st[S_DISK1_REST_SINCE]):
+            st[S_DISK1_REST_SINCE] = t
+    else:
+        st[S_DISK1_REST_SINCE] = np.nan
+    if not _at_rest(stop, y):
+        st[S_REST_SINCE] = np.nan
+        return False
+    if math.isnan(st[S_REST_SINCE]):
+        st[S_REST_SINCE] = t
+        for i in range(n):
+            stop.wmin[i] = y[i]
+            stop.wmax[i] = y[i]
+        return True
+    for i in range(n):
+        stop.wmin[i] = min(stop.wmin[i], y[i])
+        stop.wmax[i] = max(stop.wmax[i], y[i])
+    if stop.dc and stop.wmax[n - 1] - stop.wmin[n - 1] > stop.equilibrium_tol:
+        st[S_REST_SINCE] = t
+        for i in range(n):
+            stop.wmin[i] = y[i]
+            stop.wmax[i] = y[i]
+    return True
+
+
+@njit(inline="always", **_JIT)
 def _converged_now(stop, obs, t, y) -> bool:
     """STOP_CONVERGED: watch for rest and for repeating points; see :class:`StopRule`."""
     st = stop.state
     n = y.size
     if st[S_PHASE] == 1.0:
+        if stop.n_osc > 0:
+            _track_rest(stop, t, y)  # the run's classification reads the rest time
         return obs.counts[C_CROSS] >= st[S_TARGET]
     # rest: disk speeds within the tolerance, and the belt speed's range, for `dwell`
-    if _at_rest(stop, y):
-        if math.isnan(st[S_REST_SINCE]):
-            st[S_REST_SINCE] = t
-            for i in range(n):
-                stop.wmin[i] = y[i]
-                stop.wmax[i] = y[i]
-        else:
-            for i in range(n):
-                stop.wmin[i] = min(stop.wmin[i], y[i])
-                stop.wmax[i] = max(stop.wmax[i], y[i])
-            if stop.dc and stop.wmax[n - 1] - stop.wmin[n - 1] > stop.equilibrium_tol:
-                st[S_REST_SINCE] = t
-                for i in range(n):
-                    stop.wmin[i] = y[i]
-                    stop.wmax[i] = y[i]
-        if t - st[S_REST_SINCE] >= stop.dwell:
-            # the recording window is the dwell window
-            for i in range(n):
-                obs.ymin[i] = stop.wmin[i]
-                obs.ymax[i] = stop.wmax[i]
-            st[S_T_CONVERGED] = st[S_REST_SINCE]
-            return True
-    else:
-        st[S_REST_SINCE] = np.nan
+    if _track_rest(stop, t, y) and t - st[S_REST_SINCE] >= stop.dwell:
+        # the recording window is the dwell window
+        for i in range(n):
+            obs.ymin[i] = stop.wmin[i]
+            obs.ymax[i] = stop.wmax[i]
+        st[S_T_CONVERGED] = st[S_REST_SINCE]
+        return True
     # repeating points: checked once per new crossing
     c = obs.counts[C_CROSS]
     if c != st[S_CHECKED]:
@@ -360,10 +437,17 @@ def _stop_now(stop, obs, t, y):
     if _is(stop, StopRule) and _is(obs, PoincareObserver):
 
         def impl(stop, obs, t, y):
+            if stop.n_osc > 0:
+                # (converged stopping resets the count: only an increase is a crossing)
+                if obs.counts[C_CROSS] > stop.state[S_N_SEEN]:
+                    stop.state[S_LAST_CROSSING] = t
+                stop.state[S_N_SEEN] = obs.counts[C_CROSS]
             if stop.kind == STOP_AFTER_CROSSINGS:
                 return obs.counts[C_CROSS] >= stop.count
             if stop.kind == STOP_CONVERGED:
                 return _converged_now(stop, obs, t, y)
+            if stop.kind == STOP_AT_END and stop.n_osc > 0:
+                _track_rest(stop, t, y)
             return False
 
         return impl
@@ -397,7 +481,7 @@ def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) 
     atol = ctl.atol
     max_steps = ctl.max_steps
     observe_start(obs, y)
-    _reset_stop(stop)
+    _reset_stop(stop, y)
     stepper_init(method, prob, lin, y, ws)
     adaptive = ctl.h_fixed <= 0.0
     if adaptive:

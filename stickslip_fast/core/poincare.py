@@ -5,8 +5,9 @@ located on the step's dense output by :func:`driver.locate_crossing`.
 
 Equilibria (steady sliding, a stalled motor) make dx_1 flicker around zero at
 round-off level and would produce spurious "period-1" points; runs are
-therefore classified from the amplitude of the motion over the recording
-window (:func:`classify`), never from the points.
+therefore classified from how long they have been at rest at their end
+(:func:`classify`), never from the points, and never from motion that died out
+before the end.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from ..base.status import (  # noqa: F401  (re-exported: the codes used to live 
     ST_OK,
     ST_STALLED,
     ST_UNDERFLOW,
+    ST_UNSETTLED,
     STATUS_NAMES,
 )
 
@@ -102,29 +104,56 @@ def motion_measure(ymin: np.ndarray, ymax: np.ndarray, n_osc: int, dc: bool) -> 
 
 @njit(**_JIT)
 def classify(
-    amplitude: float,
-    n_crossings: int,
+    rest_time: float,
+    disk1_rest_time: float,
+    tail: float,
+    since_crossing: float,
     dc: bool,
     vb_end: float,
     vb0: float,
-    equilibrium_tol: float,
 ) -> int:
-    """Status of a run that reached t_end, from the motion over the window.
+    """Status of a run that reached its end, from its settled tail.
 
-    ``amplitude`` is :func:`motion_measure` over the recording window. The run
-    is at rest if it is <= ``equilibrium_tol``: every disk velocity stays that
-    close to 0 and the belt speed varies by less. (Positions are not used: in
-    the smooth friction law "sticking" is a slow creep, so a stalled disk still
-    drifts by ~1e-3 over thousands of time units, at velocities of O(eps).) A
-    disk stuck to a moving belt (dx = v_b) is moving, not at rest. At rest on a DC
-    motor with |v_b| <= STALL_FRACTION * |v_b0| is "stalled", otherwise
-    "equilibrium". Moving without a single crossing is "no-crossings".
+    ``rest_time`` is how long the run has been at rest at its end, < 0 if it
+    is moving (at rest: every disk
+    speed |dx_i|, |dphi_i| <= ``equilibrium_tol`` and the belt speed steady to
+    that tolerance; :func:`driver.rest_time`), ``tail`` the time over which rest
+    must hold: ``dwell`` or, if shorter, the whole recording window;
+    ``disk1_rest_time`` the same for disk 1 alone, whose local minima of x_1
+    are the section; ``since_crossing`` the time since the last recorded
+    crossing (inf if none; :func:`driver.time_since_crossing`). Motion, and crossings, that died out
+    before the tail never count.
+
+    - at rest over the whole tail: "equilibrium", or "stalled" on a DC motor
+      whose belt runs at |v_b| <= STALL_FRACTION |v_b0|;
+    - at rest at the end, but for less than the tail: "unsettled" (the run came
+      to rest too late to tell; its crossings are round-off minima of x_1 at
+      rest, never an orbit);
+    - moving, with disk 1 at rest over the tail (disk 1 in steady sliding
+      while another disk oscillates): "no-crossings": its x_1 has round-off
+      minima only; with disk 1 at rest for less than the tail: "unsettled";
+    - moving at the end without a crossing in the tail: "no-crossings" (e.g.
+      disk 1 at rest while disk 2 oscillates; the transient's crossings do not
+      make an orbit);
+    - moving at the end with crossings in the tail: "ok" (the period comes
+      from the points).
+
+    (Positions are not used: in the smooth friction law "sticking" is a slow
+    creep, so a stalled disk still drifts by ~1e-3 over thousands of time
+    units, at velocities of O(eps). A disk stuck to a moving belt, dx = v_b, is
+    moving, not at rest.)
     """
-    if amplitude <= equilibrium_tol:
+    if rest_time >= 0.0 and rest_time >= tail:
         if dc and abs(vb_end) <= STALL_FRACTION * abs(vb0):
             return ST_STALLED
         return ST_EQUILIBRIUM
-    if n_crossings == 0:
+    if rest_time >= 0.0:
+        return ST_UNSETTLED
+    if disk1_rest_time >= tail:
+        return ST_NO_CROSSINGS
+    if disk1_rest_time >= 0.0:
+        return ST_UNSETTLED
+    if not since_crossing <= tail:
         return ST_NO_CROSSINGS
     return ST_OK
 

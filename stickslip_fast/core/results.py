@@ -36,19 +36,25 @@ class SimulationResult:
     period : int
         Smallest p <= 64 with which the points repeat; 0 if none.
     status : str
-        "ok", "equilibrium", "stalled", "no-crossings", "nonfinite",
-        "step-underflow" or "max-steps".
+        "ok", "equilibrium", "stalled", "unsettled", "no-crossings",
+        "nonfinite", "step-underflow" or "max-steps" (see
+        :data:`~stickslip_fast.STATUS_NAMES` and docs/reliability.md).
     n_steps, n_rejected : int
         Accepted and rejected steps.
     t_final : float
         Time reached (t_end unless the run failed).
     final_state : ndarray, shape (n_state,)
     amplitude : float
-        Distance from rest over the recording window: the largest |dx_i| or
-        |dphi_i|, or the range of v_b. At rest when below ``equilibrium_tol``.
+        Distance from rest over the recording window: the largest ``|dx_i|`` or
+        ``|dphi_i|``, or the range of v_b (informative; the status is judged on
+        the end of the run, see :func:`simulate`'s ``equilibrium_tol``).
     t_converged : float
         With ``stop="converged"``: when the run was found converged (NaN if it
         reached t_end first, and always with ``stop="fixed"``).
+    rest_time : float
+        How long the disks had been at rest at ``t_final`` (-1.0 if moving
+        then): "equilibrium" needs ``dwell`` (or the whole recording window),
+        less is "unsettled".
     t, y : ndarray or None
         Uniform samples from t_transient every ``sample_dt`` (when requested).
     settings : Settings
@@ -69,6 +75,7 @@ class SimulationResult:
     final_state: np.ndarray
     amplitude: float
     t_converged: float = float("nan")
+    rest_time: float = -1.0
     t: np.ndarray | None = None
     y: np.ndarray | None = None
     settings: Settings | None = None

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.messages import plain
 from .trajectory import METHODS
 
 __all__ = [
@@ -58,8 +59,10 @@ DEFAULT_EQUILIBRIUM_TOL = 1e-4
 DEFAULT_MAX_STEPS = 20_000_000
 #: Stop rules: run to t_end ("fixed"), or end once converged ("converged").
 STOP_KINDS = ("fixed", "converged")
-#: Converged stopping: how long the disks must stay at rest before a run ends
-#: as an equilibrium (about 15 periods of the slowest free oscillation, 2 pi sqrt(m)).
+#: How long the disks must have been at rest at the end of a run for it to be
+#: an equilibrium (the whole recording window if that is shorter), and with
+#: converged stopping how long they must stay at rest before the run ends: about
+#: 15 periods of the slowest free oscillation, 2 pi sqrt(m).
 DEFAULT_DWELL = 200.0
 
 
@@ -89,15 +92,15 @@ def check_real(
     if isinstance(value, (bool, np.bool_)) or not isinstance(
         value, (int, float, np.integer, np.floating)
     ):
-        raise ValueError(f"{name} must be a real number, got {value!r}")
+        raise ValueError(f"{name} must be a real number, got {plain(value)}")
     value = float(value)
     low_ok = value >= minimum if allow_equal else value > minimum
     if not math.isfinite(value) or not low_ok:
         raise ValueError(
-            f"{name} must be finite and {'>=' if allow_equal else '>'} {minimum:g}, got {value!r}"
+            f"{name} must be finite and {'>=' if allow_equal else '>'} {minimum:g}, got {plain(value)}"
         )
     if value > maximum:
-        raise ValueError(f"{name} must be <= {maximum:g}, got {value!r}")
+        raise ValueError(f"{name} must be <= {maximum:g}, got {plain(value)}")
     return value
 
 
@@ -106,11 +109,11 @@ def check_integer(name: str, value: Any, minimum: int) -> int:
     if isinstance(value, (bool, np.bool_)) or not isinstance(
         value, (int, float, np.integer, np.floating)
     ):
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {plain(value)}")
     if isinstance(value, (float, np.floating)) and not float(value).is_integer():
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r} (not cut)")
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {plain(value)} (not cut)")
     if int(value) < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {plain(value)}")
     return int(value)
 
 
@@ -157,7 +160,7 @@ def _integer(minimum: int) -> Callable[[str, Any], int]:
 def _choice(options: tuple[str, ...]) -> Callable[[str, Any], str]:
     def check(name: str, value: Any) -> str:
         if not isinstance(value, str) or value not in options:
-            raise ValueError(f"{name} must be one of {options}, got {value!r}")
+            raise ValueError(f"{name} must be one of {options}, got {plain(value)}")
         return value
 
     return check
@@ -200,7 +203,9 @@ class Settings:
         "fixed" (run to t_end) or "converged" (end once converged; see
         :func:`stickslip_fast.simulate`).
     dwell : float
-        Converged stopping: time at rest before a run ends as an equilibrium.
+        Time at rest at the end of a run that makes it an equilibrium (the
+        whole recording window if shorter); with converged stopping, the time
+        at rest before the run ends.
     """
 
     method: str = _field("rodas5p", _choice(METHODS))
@@ -225,8 +230,6 @@ class Settings:
             raise ValueError("method 'dopri5-fixed' needs a step size h")
         if self.method == "dopri5" and self.h != 0.0:
             raise ValueError("h is not used by the adaptive 'dopri5'; use 'dopri5-fixed'")
-        if self.stop != "converged" and self.dwell != DEFAULT_DWELL:
-            raise ValueError("dwell is only used with stop='converged'")
 
     @classmethod
     def resolve(

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ..base.status import ST_NOT_COMPUTED, ST_OK
+from ..base.status import ST_NOT_COMPUTED, ST_OK, ST_UNSETTLED
 from ..model.params import N_PARAMS
 from .poincare import detect_period
 from .problems import (
@@ -90,7 +90,8 @@ def _lane_values(
 @njit(**_JIT)
 def _usable_start(status: int) -> bool:
     # a failed run's final state is no start for the next value of a chain
-    return 0 <= status <= 3  # ok, equilibrium, stalled, no-crossings
+    # ok, equilibrium, stalled, no-crossings, unsettled
+    return 0 <= status <= 3 or status == ST_UNSETTLED
 
 
 @njit(**_JIT)

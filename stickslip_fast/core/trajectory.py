@@ -34,13 +34,15 @@ from ..base.status import ST_ERROR, ST_OK
 from ..model.params import N_PARAMS, P_VB0
 from .driver import (
     S_T_CONVERGED,
-    STOP_AT_END,
     Controls,
     PoincareObserver,
     Section,
     converged_stop,
+    disk1_rest_time,
     drive,
-    simple_stop,
+    fixed_stop,
+    rest_time,
+    time_since_crossing,
 )
 from .poincare import classify, motion_measure
 from .problems import (
@@ -77,12 +79,8 @@ I_STEPS, I_REJECTED, I_CROSSINGS, I_SAMPLES = range(4)
 
 
 N_STAT_I = 4
-
-
-F_T_FINAL, F_AMPLITUDE, F_T_CONVERGED = range(3)
-
-
-N_STAT_F = 3
+F_T_FINAL, F_AMPLITUDE, F_T_CONVERGED, F_REST_TIME = range(4)
+N_STAT_F = 4
 
 
 #: The model's Poincare section: dx1 = 0 crossed upwards (local minima of x1).
@@ -159,7 +157,7 @@ def _stop_rule(rs, n_osc, dc, n):
             rs.period_tol, rs.max_period, CONVERGED_MIN_REPEATS, CONVERGED_MIN_POINTS,
             rs.equilibrium_tol, rs.dwell, n_osc, dc, n,
         )  # fmt: skip
-    return simple_stop(STOP_AT_END, 0, n)
+    return fixed_stop(rs.equilibrium_tol, n_osc, dc, n)
 
 
 def kernel_variant(n_osc: int, dc: bool) -> tuple:
@@ -246,10 +244,22 @@ def _run(
     )
     fstat[1] = stop.state[S_T_CONVERGED]
     if status == ST_OK:
-        amp = motion_measure(obs.ymin, obs.ymax, n_osc, dc)
+        t_final = fstat[0]
         vb_end = y[n - 1] if dc else 0.0
-        status = classify(amp, obs.counts[0], dc, vb_end, prob.p[P_VB0], rs.equilibrium_tol)
+        status = classify(
+            rest_time(stop, t_final), disk1_rest_time(stop, t_final),
+            settled_tail(rs, t_final), time_since_crossing(stop, t_final), dc, vb_end,
+            prob.p[P_VB0],
+        )  # fmt: skip
     return status
+
+
+@njit(**_JIT)
+def settled_tail(rs, t_final: float) -> float:
+    """The time at rest that makes a run an equilibrium: ``dwell``, or the whole
+    recording window if that is shorter (see :func:`poincare.classify`)."""
+    t_rec = 0.0 if rs.stop_kind == STOP_WHEN_CONVERGED else rs.t_transient
+    return min(rs.dwell, t_final - t_rec)
 
 
 @njit(**_JIT)
@@ -309,7 +319,7 @@ def integrate(
     total), ``samples`` (uniform grid from t_transient), ``y_end`` (state at the
     last accepted time), ``stat_i`` (steps, rejected, crossings, samples) and
     ``stat_f`` (final time, the :func:`motion_measure` of the recording window,
-    time of convergence). With ``rs.stop_kind`` STOP_WHEN_CONVERGED the run
+    time of convergence, time at rest at the end: -1 if moving). With ``rs.stop_kind`` STOP_WHEN_CONVERGED the run
     ends once it has converged (see :func:`driver.converged_stop`). ``abort``
     (int64[1]) ends the run with "interrupted" when set from another thread.
     """
@@ -331,6 +341,7 @@ def integrate(
     stat_f[F_T_FINAL] = fstat[0]
     stat_f[F_AMPLITUDE] = motion_measure(obs.ymin, obs.ymax, n_osc, dc)
     stat_f[F_T_CONVERGED] = fstat[1]
+    stat_f[F_REST_TIME] = rest_time(stop, fstat[0])
     return status
 
 

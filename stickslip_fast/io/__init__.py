@@ -52,6 +52,7 @@ Root attributes: ``schema_version``, ``package_version``, ``kind``, ``config``
 (JSON: system, settings, y0, sample_dt and the TOML mapping it came from),
 ``config_sha256``, ``created``, ``title``, ``notes``, ``status``, ``period``,
 ``n_steps``, ``n_rejected``, ``n_crossings``, ``t_final``, ``amplitude``,
+``rest_time`` (time at rest at the end, -1 if moving; files of 0.1.0 lack it),
 ``method``. Like a sweep file it opens with
 ``xarray.open_dataset(path, engine="h5netcdf")``.
 """

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.messages import plain
 from .base import ResultFileError, _short, open_h5
 from .layout import ANALYSIS_FIELDS, PER_VALUE_FIELDS, SCHEMA_VERSION
 from .sweepfile import scan_sweep, stored_config
@@ -135,7 +136,7 @@ def read_sweep(path: str | Path) -> dict[str, Any]:
         got = hashlib.sha256(np.ascontiguousarray(axis, dtype="<f8").tobytes()).hexdigest()
         if got != want:
             raise ResultFileError(
-                f"{path}: the stored values of {p!r} do not match their SHA-256 in the "
+                f"{path}: the stored values of {plain(p)} do not match their SHA-256 in the "
                 "configuration; the file is corrupted"
             )
     return out

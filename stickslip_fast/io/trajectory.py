@@ -96,6 +96,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
                 a[key] = int(getattr(result, key))
             a["t_final"] = float(result.t_final)
             a["amplitude"] = float(result.amplitude)
+            a["rest_time"] = float(result.rest_time)
             for key, value in system.to_dict().items():
                 a[f"system.{key}"] = value
 
@@ -187,6 +188,7 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
         t_final=float(attrs["t_final"]),
         final_state=data["final_state"],
         amplitude=float(attrs["amplitude"]),
+        rest_time=float(attrs.get("rest_time", -1.0)),  # files of 0.1.0 lack it
         t=data["t"],
         y=data["y"],
         settings=Settings.from_dict(config["settings"]),

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.messages import plain
 from .params import ETA_MAX, ETA_MIN, N_PARAMS, P_ETAP, PARAM_INDEX, eta_prime
 
 __all__ = [
@@ -111,17 +112,17 @@ class System:
             if isinstance(value, bool) or not isinstance(
                 value, (int, float, np.floating, np.integer)
             ):
-                raise ValueError(f"System.{name} must be a real number, got {value!r}")
+                raise ValueError(f"System.{name} must be a real number, got {plain(value)}")
             value = float(value)
             if not math.isfinite(value):
-                raise ValueError(f"System.{name} must be finite, got {value!r}")
+                raise ValueError(f"System.{name} must be finite, got {plain(value)}")
             object.__setattr__(self, name, value)
         if self.m <= 0:
-            raise ValueError(f"System.m must be > 0, got {self.m!r}")
+            raise ValueError(f"System.m must be > 0, got {plain(self.m)}")
         if self.eps <= 0:
-            raise ValueError(f"System.eps must be > 0, got {self.eps!r}")
+            raise ValueError(f"System.eps must be > 0, got {plain(self.eps)}")
         if self.Tb <= 0:
-            raise ValueError(f"System.Tb must be > 0, got {self.Tb!r}")
+            raise ValueError(f"System.Tb must be > 0, got {plain(self.Tb)}")
         # friction scale and motor load are products of positive physical constants (Eqs. 6,
         # 18); negative values would make friction drive the disk (docs/model.md)
         for name in ("mu", "beta"):
@@ -133,7 +134,7 @@ class System:
         if not ETA_MIN <= self.eta <= ETA_MAX:
             raise ValueError(
                 f"System.eta must lie in [{ETA_MIN}, {ETA_MAX}] (the range of the paper's "
-                f"fit for eta'; no extrapolation), got {self.eta!r}"
+                f"fit for eta'; no extrapolation), got {plain(self.eta)}"
             )
         if self.drive not in DRIVES:
             raise ValueError(f"System.drive must be one of {DRIVES}, got {self.drive!r}")
@@ -215,10 +216,10 @@ class System:
         named = dict(m_hat=m_hat, r_hat=r_hat, B_hat=B_hat, k1_hat=k1_hat, k2_hat=k2_hat)
         for name, value in named.items():
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+                raise ValueError(f"{name} must be finite and > 0, got {plain(value)}")
         for name, value in dict(c1_hat=c1_hat, c2_hat=c2_hat, vb_hat=vb_hat, mu=mu, g=g).items():
             if not math.isfinite(value):
-                raise ValueError(f"{name} must be finite, got {value!r}")
+                raise ValueError(f"{name} must be finite, got {plain(value)}")
         k_sum = k1_hat + k2_hat
         alpha = math.sqrt(k_sum / m_hat)
         damp = math.sqrt(m_hat * k_sum)
