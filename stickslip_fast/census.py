@@ -219,6 +219,8 @@ def census(
     track_threshold: float = DEFAULT_TRACK_THRESHOLD,
     title: str = "",
     notes: str = "",
+    _config_extra: dict | None = None,
+    _desc: str | None = None,
 ) -> CensusResult:
     """Every attractor at every value of ``param``, with its basin fraction.
 
@@ -327,6 +329,8 @@ def census(
         "stop": stop,
         "settings": settings.to_dict(),
     }
+    if _config_extra:  # callers built on the census (basins) add their own fields
+        config.update(_config_extra)
     if backend == "cuda":  # GPU points differ from the CPU's at ~1e-9: never mixed in a file
         config["backend"] = "cuda"
     layout = CensusLayout(
@@ -374,7 +378,7 @@ def census(
 
             bar = stack.enter_context(
                 tqdm(total=done.size, initial=done.size - n_todo, unit="run",
-                     desc=f"census {param}", dynamic_ncols=True, smoothing=0.1)
+                     desc=_desc or f"census {param}", dynamic_ncols=True, smoothing=0.1)
             )  # fmt: skip
         units = _units(vals, start_arr, done, chunk_size, nthreads)
         results = stack.enter_context(

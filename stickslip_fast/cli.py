@@ -1,4 +1,4 @@
-"""Command line: ``stickslip-fast simulate | sweep | census | continue | info``.
+"""Command line: ``stickslip-fast simulate | sweep | census | basins | continue | info``.
 
 A thin layer over the public API: it parses a TOML config (see
 :mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
@@ -214,6 +214,12 @@ def _cmd_census(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(_census_report(args.output))
     return 0
+
+
+def _cmd_basins(args: argparse.Namespace) -> int:
+    from .basins_cli import cmd_basins
+
+    return cmd_basins(_config_from_args(args), args)
 
 
 def _cmd_continue(args: argparse.Namespace) -> int:
@@ -486,7 +492,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
         print(b.summary())
         return 0
     if file_kind(args.file) == "census":
-        print(_census_report(args.file))
+        from .basins_cli import basins_report, is_basins_file
+
+        print(basins_report(args.file) if is_basins_file(args.file) else _census_report(args.file))
         if args.json:
             import h5py
 
@@ -553,6 +561,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=_cmd_census)
 
+    p = sub.add_parser("basins", help="basins of attraction on a plane of starts (resumable)")
+    _add_common(p)
+    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="HDF5 result file")
+    p.add_argument("--threads", type=int, help="Numba threads (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    p.add_argument("--workers", type=int, help="start a local Dask cluster with N workers")
+    p.add_argument("--backend", choices=("local", "dask", "cuda"), help="as for census")
+    p.set_defaults(func=_cmd_basins)
+
     p = sub.add_parser(
         "continue",
         help="follow a periodic orbit in one parameter into a branch file (docs/orbits.md)",
@@ -610,7 +628,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         # the compiled work stops within about a second (interrupt.call_interruptible)
         out = getattr(args, "output", None)
-        if args.command in ("sweep", "census") and out is not None and Path(out).exists():
+        if args.command in ("sweep", "census", "basins") and out is not None and Path(out).exists():
             msg = (
                 f"stickslip-fast: interrupted; finished chunks are in {out}, "
                 "run the same command again to resume"
