@@ -211,6 +211,13 @@ class EdgeCheck:
         The same closest approach for starts at cells away from the boundary.
     control_n_near : ndarray of int (mc,)
     near : float
+    split_crossing : ndarray of int (m,)
+        First crossing at which the runs from the two ends of the bracket (at
+        most ``tol`` apart) are more than ``split`` apart (max norm): how long
+        the pair stays on the boundary (-1: never within the run).
+    t_split : ndarray (m,)
+        Time of that crossing (NaN: never).
+    split : float
     distances : ndarray (m, K)
         Distance of every crossing of every boundary trajectory (NaN-padded).
     """
@@ -228,6 +235,9 @@ class EdgeCheck:
     control_min_distance: np.ndarray
     control_n_near: np.ndarray
     near: float
+    split_crossing: np.ndarray
+    t_split: np.ndarray
+    split: float
     distances: np.ndarray = field(repr=False)
 
     @property
@@ -240,6 +250,8 @@ class EdgeCheck:
             "control_median_n_near": float(np.median(self.control_n_near)),
             "boundary_share_near": float(np.mean(self.n_near > 0)),
             "control_share_near": float(np.mean(self.control_n_near > 0)),
+            "median_split_crossing": float(np.median(self.split_crossing)),
+            "median_t_split": float(np.nanmedian(self.t_split)),
         }
 
     def to_group(self, g: Any) -> None:
@@ -259,6 +271,9 @@ class EdgeCheck:
              "min_distance": (self.min_distance, ("track",), "closest approach to the saddle"),
              "t_min": (self.t_min, ("track",), "time of the closest approach"),
              "n_near": (self.n_near.astype("i4"), ("track",), "crossings within near"),
+             "split_crossing": (self.split_crossing.astype("i4"), ("track",),
+                                "first crossing where the bracket's two runs differ by > split"),
+             "t_split": (self.t_split, ("track",), "time of that crossing"),
              "distances": (self.distances, ("track", "crossing"), "distance per crossing"),
              "control_min_distance": (self.control_min_distance, ("control",),
                                       "closest approach from cells away from the boundary"),
@@ -267,7 +282,7 @@ class EdgeCheck:
              "saddle_points": (self.saddle_points, ("saddle_point", "state"),
                                "the saddle orbit's Poincare points")},
             {"saddle_period": self.saddle_period, "saddle_T": self.saddle_T,
-             "saddle_status": self.saddle_status, "near": self.near,
+             "saddle_status": self.saddle_status, "near": self.near, "split": self.split,
              "saddle_multipliers": json.dumps([[z.real, z.imag] for z in mult.tolist()])},
         )  # fmt: skip
 
@@ -279,7 +294,8 @@ class EdgeCheck:
             g["saddle_points"][...], int(a["saddle_period"]), float(a["saddle_T"]), mult,
             str(a["saddle_status"]), g["u"][...], g["v"][...], g["min_distance"][...],
             g["t_min"][...], g["n_near"][...], g["control_min_distance"][...],
-            g["control_n_near"][...], float(a["near"]), g["distances"][...],
+            g["control_n_near"][...], float(a["near"]), g["split_crossing"][...],
+            g["t_split"][...], float(a["split"]), g["distances"][...],
         )  # fmt: skip
 
 
@@ -307,6 +323,23 @@ def _recurrent_point(runs: list, attractors: list, periods: tuple) -> tuple:
     return best[1], best[2]
 
 
+def _splits(runs_a: list, runs_b: list, split: float) -> tuple:
+    """First crossing (and its time) where the two runs of a bracket differ by > split."""
+    k_split = np.full(len(runs_a), -1, dtype=int)
+    t_split = np.full(len(runs_a), np.nan)
+    for i, (ra, rb) in enumerate(zip(runs_a, runs_b)):
+        n = min(len(ra.poincare), len(rb.poincare))
+        d = np.max(np.abs(ra.poincare[:n] - rb.poincare[:n]), axis=1)
+        far = np.flatnonzero(d > split)
+        if far.size:
+            k_split[i] = far[0]
+            t_split[i] = ra.t_poincare[far[0]]
+        elif len(ra.poincare) != len(rb.poincare):  # one settled to rest, the other did not
+            k_split[i] = n
+            t_split[i] = ra.t_poincare[n] if n < len(ra.poincare) else rb.t_poincare[n]
+    return k_split, t_split
+
+
 def _distances(runs: list, saddle: np.ndarray, width: int) -> tuple:
     dist = np.full((len(runs), width), np.nan)
     tmin = np.full(len(runs), np.nan)
@@ -325,6 +358,7 @@ def edge_check(
     n_tracks: int = 24,
     t_end: float = 600.0,
     near: float = 1e-3,
+    split: float = 1e-3,
     periods: tuple = (1, 2),
     seed: int = 0,
     store: bool = True,
@@ -348,6 +382,8 @@ def edge_check(
         Length of each followed run.
     near : float
         Distance (max norm) that counts as "at the saddle".
+    split : float
+        Distance at which the runs from the two ends of a bracket count as split.
     periods : tuple of int
         Periods searched for the saddle.
     seed : int
@@ -369,13 +405,17 @@ def edge_check(
     def run(states):
         return [simulate(result.system, t_end, y0=y, **kw) for y in states]
 
-    runs = run(result.state_at(np.stack([b.u[pick], b.v[pick]], 1)))
+    runs = run(result.state_at(b.ua[pick]))
+    runs_b = run(result.state_at(b.ub[pick]))
+    k_split, t_split = _splits(runs, runs_b, split)
     ctrl_cells = np.flatnonzero(~bm.boundary_cells(result.labels).ravel())
     ctrl = np.sort(rng.choice(ctrl_cells, min(len(pick), ctrl_cells.size), replace=False))
     controls = run(result.starts[ctrl])
     if saddle is None:
         z, p = _recurrent_point(runs, result.attractors, tuple(periods))
         saddle = find_orbit(result.system, z, period=p) if z is not None else None
+        if saddle is not None and saddle.status == "equilibrium":
+            saddle = None  # Newton fell onto the rest point: no saddle orbit found
     if saddle is None:
         sp, per, T, mult, st = np.full((1, result.system.n_state), np.nan), 0, np.nan, [], "none"
     else:
@@ -387,7 +427,8 @@ def edge_check(
     e = EdgeCheck(
         np.asarray(sp), int(per), float(T), np.asarray(mult, dtype=complex), str(st),
         b.u[pick], b.v[pick], np.nanmin(dist, axis=1), tmin, np.sum(dist <= near, axis=1),
-        np.nanmin(cdist, axis=1), np.sum(cdist <= near, axis=1), float(near), dist,
+        np.nanmin(cdist, axis=1), np.sum(cdist <= near, axis=1), float(near), k_split, t_split,
+        float(split), dist,
     )  # fmt: skip
     result.edge = e
     if store and result.path is not None:

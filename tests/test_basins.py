@@ -236,3 +236,22 @@ def test_dask_backend_is_bit_identical(ref):
     d = ssf.basins(S32, (G1, G2), backend="dask", n_workers=2, **KW)
     np.testing.assert_array_equal(d.labels, ref.labels)
     np.testing.assert_array_equal(d.census.raw["points"], ref.census.raw["points"])
+
+
+def test_edge_check_follows_brackets_and_measures_distances(ref):
+    from types import SimpleNamespace
+
+    from stickslip_fast.basins_boundary import edge_check
+
+    refine_boundary(ref, tol=1e-6, max_segments=4, store=False)
+    p1 = next(a for a in ref.attractors if a.kind == "orbit")
+    # the stable orbit as the reference "saddle": control runs that reach it come close
+    fake = SimpleNamespace(points=p1.points, period=1, T=np.nan, multipliers=np.zeros(3),
+                           status="given")  # fmt: skip
+    e = edge_check(ref, saddle=fake, n_tracks=3, t_end=400.0, store=False)
+    ok = ref.boundary.status == 0
+    assert len(e.u) == min(3, ok.sum()) and e.saddle_status == "given"
+    # the two ends of each bracket reach different attractors, so their runs split
+    assert np.all(e.split_crossing >= 0) and np.all(np.isfinite(e.t_split))
+    assert np.nanmin(e.control_min_distance) < 1e-6  # a control run settles on the orbit
+    assert e.distances.shape[0] == len(e.u)
