@@ -43,6 +43,25 @@ def track_colour(track: int) -> Any:
     return cmap((2 * track) % 20 + (track // 10) % 2)
 
 
+#: --colours kind: one colour per (kind, period), the same in every panel
+KIND_COLOURS = {"equilibrium": "tab:blue", "stalled": "tab:gray", "unresolved": "tab:purple"}
+PERIOD_COLOURS = ["tab:orange", "tab:green", "tab:red", "tab:brown", "tab:pink", "tab:olive"]
+
+
+def attractor_colours(d: dict, mode: str) -> dict[int, Any]:
+    """Colour of every attractor id: the census's track colours, or by kind and period."""
+    out = {}
+    for r, aid in enumerate(d["id"]):
+        kind = KINDS[int(d["kind"][r])]
+        if mode == "id":
+            out[int(aid)] = track_colour(int(aid))
+        elif kind == "orbit":
+            out[int(aid)] = PERIOD_COLOURS[(int(d["period"][r]) - 1) % len(PERIOD_COLOURS)]
+        else:
+            out[int(aid)] = KIND_COLOURS[kind]
+    return out
+
+
 def read(path: str | Path) -> dict[str, Any]:
     """Everything a panel needs from one basins file."""
     out: dict[str, Any] = {"path": str(path)}
@@ -76,12 +95,12 @@ def _edges(a: np.ndarray) -> np.ndarray:
     return np.concatenate([[2 * a[0] - mid[0]], mid, [2 * a[-1] - mid[-1]]])
 
 
-def draw_map(ax: Any, d: dict) -> None:
+def draw_map(ax: Any, d: dict, mode: str = "id") -> None:
     """One basin map with attractors, boundary and saddle."""
     lab = d["label"]
-    ids = sorted(int(i) for i in np.unique(lab) if i >= 0)
-    top = max(ids + [0])
-    colours = [track_colour(i) for i in range(top + 1)]
+    col = attractor_colours(d, mode)
+    top = max([0, *col, *(int(i) for i in np.unique(lab))])
+    colours = [col.get(i, "white") for i in range(top + 1)]
     cmap = ListedColormap(["black"] + colours)
     ax.pcolormesh(_edges(d["u"]), _edges(d["v"]), np.where(lab < 0, -1, lab).T + 1,
                   cmap=cmap, vmin=-0.5, vmax=top + 1.5, shading="flat",
@@ -92,8 +111,11 @@ def draw_map(ax: Any, d: dict) -> None:
         pts = pts[np.all(np.isfinite(pts), axis=1)]
         uv = project(d, pts)
         name = f"P{d['period'][r]}" if kind == "orbit" else kind
+        if len(d["base"]) >= 8 and kind == "orbit":  # two or more disks: disk 2 against 1
+            gap = float(np.max(np.abs(pts[:, 4:8] - pts[:, 0:4])))
+            name += ", in phase" if gap < 1e-6 else f", |disk 2 - disk 1| = {gap:.2f}"
         ax.plot(uv[:, 0], uv[:, 1], "o" if kind == "orbit" else "s", ms=8,
-                mfc=track_colour(int(aid)), mec="k", mew=1.2,
+                mfc=col[int(aid)], mec="k", mew=1.2,
                 label=f"id {aid}: {name}, {d['fraction'][r]:.3f} ± "
                       f"{d['fraction_stderr'][r]:.3f}")  # fmt: skip
     if d["boundary"] is not None:
@@ -123,7 +145,8 @@ def draw_map(ax: Any, d: dict) -> None:
                  fontsize=9)  # fmt: skip
     ax.set_xlim(_edges(d["u"])[[0, -1]])
     ax.set_ylim(_edges(d["v"])[[0, -1]])
-    ax.legend(fontsize=6.5, loc="upper right", framealpha=0.85)
+    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
+              frameon=False)  # fmt: skip
 
 
 def draw_entropy(ax: Any, data: list[dict]) -> None:
@@ -149,14 +172,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cols", type=int, default=None, help="panels per row")
     p.add_argument("--entropy", action="store_true", help="add the entropy-against-eta panel")
     p.add_argument("--title", default=None, help="figure title")
+    p.add_argument("--colours", choices=("id", "kind"), default="id",
+                   help="id: the census figures' track colours (default); kind: one colour "
+                        "per kind and period, the same in every panel")  # fmt: skip
     args = p.parse_args(argv)
     data = [read(f) for f in args.files]
     n = len(data) + int(args.entropy)
     cols = args.cols or min(n, 3)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.8 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 5.6 * rows), squeeze=False)
     for ax, d in zip(axes.flat, data):
-        draw_map(ax, d)
+        draw_map(ax, d, args.colours)
     if args.entropy:
         draw_entropy(axes.flat[len(data)], data)
     for ax in list(axes.flat)[n:]:

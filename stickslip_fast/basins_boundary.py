@@ -21,6 +21,7 @@ boundary (docs/basins.md).
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -242,16 +243,21 @@ class EdgeCheck:
 
     @property
     def summary(self) -> dict[str, float]:
-        """Medians of the boundary and control statistics."""
+        """Medians of the boundary and control statistics (NaN without a saddle)."""
+
+        def med(a: np.ndarray) -> float:
+            a = np.asarray(a, dtype=float)
+            return float(np.median(a[np.isfinite(a)])) if np.isfinite(a).any() else np.nan
+
         return {
-            "boundary_median_min_distance": float(np.nanmedian(self.min_distance)),
-            "control_median_min_distance": float(np.nanmedian(self.control_min_distance)),
+            "boundary_median_min_distance": med(self.min_distance),
+            "control_median_min_distance": med(self.control_min_distance),
             "boundary_median_n_near": float(np.median(self.n_near)),
             "control_median_n_near": float(np.median(self.control_n_near)),
             "boundary_share_near": float(np.mean(self.n_near > 0)),
             "control_share_near": float(np.mean(self.control_n_near > 0)),
             "median_split_crossing": float(np.median(self.split_crossing)),
-            "median_t_split": float(np.nanmedian(self.t_split)),
+            "median_t_split": med(self.t_split),
         }
 
     def to_group(self, g: Any) -> None:
@@ -424,10 +430,13 @@ def edge_check(
     width = max([1, *(len(r.poincare) for r in runs)])
     dist, tmin = _distances(runs, sp, width)
     cdist, _ = _distances(controls, sp, max([1, *(len(r.poincare) for r in controls)]))
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows: no saddle, no crossing
+        dmin, cmin = np.nanmin(dist, axis=1), np.nanmin(cdist, axis=1)
     e = EdgeCheck(
         np.asarray(sp), int(per), float(T), np.asarray(mult, dtype=complex), str(st),
-        b.u[pick], b.v[pick], np.nanmin(dist, axis=1), tmin, np.sum(dist <= near, axis=1),
-        np.nanmin(cdist, axis=1), np.sum(cdist <= near, axis=1), float(near), k_split, t_split,
+        b.u[pick], b.v[pick], dmin, tmin, np.sum(dist <= near, axis=1),
+        cmin, np.sum(cdist <= near, axis=1), float(near), k_split, t_split,
         float(split), dist,
     )  # fmt: skip
     result.edge = e

@@ -164,6 +164,13 @@ def basins_report(path: Any) -> str:
         sm = e.summary
         mu = ", ".join(f"{abs(z):.4g}" for z in e.saddle_multipliers[:3])
         lines.append(
+            f"edge:      {len(e.u)} brackets followed: their two runs split after a median "
+            f"{sm['median_split_crossing']:g} crossings (t = {sm['median_t_split']:.4g})"
+        )
+        if e.saddle_period == 0:
+            lines.append("saddle:    no saddle orbit of the periods searched was found")
+            return "\n".join(lines)
+        lines.append(
             f"saddle:    period {e.saddle_period} ({e.saddle_status}), |multipliers| {mu}; "
             f"boundary runs: median closest approach {sm['boundary_median_min_distance']:.2e}, "
             f"control runs: {sm['control_median_min_distance']:.2e}"
