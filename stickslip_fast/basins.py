@@ -294,6 +294,29 @@ def _result(census_res: CensusResult, meta: dict, entropy_box: int) -> BasinsRes
     )  # fmt: skip
 
 
+def _write(out: Any, result: BasinsResult) -> None:
+    from .io.basins import write_basins
+
+    write_basins(out, result)
+
+
+def _starts_and_meta(system: System, grid: Any, plane: Any, base: Any, entropy_box: Any):
+    """Check the arguments of :func:`basins`; the starts and the configuration's grid part."""
+    if not isinstance(system, System):
+        raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
+    if not isinstance(grid, (tuple, list)) or len(grid) != 2:
+        raise ValueError("grid must be a pair (g1, g2) of 1-D arrays")
+    starts, b, dirs, axis_names = plane_starts(system, grid[0], grid[1], plane, base)
+    if isinstance(entropy_box, bool) or not isinstance(entropy_box, int) or entropy_box < 1:
+        raise ValueError(f"entropy_box must be an integer >= 1, got {entropy_box!r}")
+    meta = {
+        "g1": np.asarray(grid[0], dtype=float).tolist(),
+        "g2": np.asarray(grid[1], dtype=float).tolist(),
+        "axis_names": axis_names, "base": b.tolist(), "directions": dirs.tolist(),
+    }  # fmt: skip
+    return starts, meta
+
+
 # ------------------------------------------------------------------ the driver
 def basins(
     system: System,
@@ -333,20 +356,15 @@ def basins(
     base : array_like, optional
         The state whose other coordinates the plane keeps (default zeros).
     t_end, t_transient, stop
-        As for :func:`census`; ``stop="converged"`` (the default) ends each
-        run once its Poincare points repeat or it has come to rest, ``t_end``
-        being the cap.
+        As for :func:`census`; ``stop="converged"`` (the default): ``t_end`` is the cap.
     out : path, optional
-        HDF5 file (docs/basins.md): the census datasets plus a ``/basins``
-        group. Running the same map on it again resumes; a different
-        configuration (grid, plane, base, settings, system) is refused.
+        HDF5 file (docs/basins.md): the census datasets plus ``/basins``. The same
+        map on it resumes; a different configuration is refused.
     threads, backend, scheduler, n_workers, progress, chunk_size
-        As for :func:`census` (results do not depend on them; ``backend="cuda"``
-        files are all-GPU).
+        As for :func:`census` (results do not depend on them; cuda files are all-GPU).
     max_points, identity_tol, **settings
-        Integration settings (``method``, ``rtol``, ``atol``, ``h``,
-        ``max_steps``, ``equilibrium_tol``, ``period_tol``, ``dwell``) and the
-        census's identity tolerance.
+        As for :func:`census` (``method``, ``rtol``, ``atol``, ``h``, ``max_steps``,
+        ``equilibrium_tol``, ``period_tol``, ``dwell``).
     entropy_box : int
         Box side in cells of the stored basin entropies.
     refine : dict, optional
@@ -362,18 +380,7 @@ def basins(
     from .basins_boundary import refine_boundary
     from .census import census
 
-    if not isinstance(system, System):
-        raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
-    if not isinstance(grid, (tuple, list)) or len(grid) != 2:
-        raise ValueError("grid must be a pair (g1, g2) of 1-D arrays")
-    starts, b, dirs, axis_names = plane_starts(system, grid[0], grid[1], plane, base)
-    if isinstance(entropy_box, bool) or not isinstance(entropy_box, int) or entropy_box < 1:
-        raise ValueError(f"entropy_box must be an integer >= 1, got {entropy_box!r}")
-    meta = {
-        "g1": np.asarray(grid[0], dtype=float).tolist(),
-        "g2": np.asarray(grid[1], dtype=float).tolist(),
-        "axis_names": axis_names, "base": b.tolist(), "directions": dirs.tolist(),
-    }  # fmt: skip
+    starts, meta = _starts_and_meta(system, grid, plane, base, entropy_box)
     res = census(
         system, "eta", [system.eta], starts=starts, t_end=t_end, t_transient=t_transient,
         stop=stop, out=out, threads=threads, backend=backend, scheduler=scheduler,
@@ -385,9 +392,7 @@ def basins(
     meta["identity_tol"] = identity_tol
     result = _result(res, meta, entropy_box)
     if out is not None:
-        from .io.basins import write_basins
-
-        write_basins(out, result)
+        _write(out, result)
     if refine is not None:
         refine_boundary(result, threads=threads, progress=progress, **dict(refine))
     return result

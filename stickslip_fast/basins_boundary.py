@@ -329,6 +329,20 @@ def _recurrent_point(runs: list, attractors: list, periods: tuple) -> tuple:
     return best[1], best[2]
 
 
+def _saddle(result: Any, runs: list, saddle: Any, periods: tuple) -> tuple:
+    """(points, period, T, multipliers, status) of the given or the Newton-found saddle."""
+    from .orbits import find_orbit
+
+    if saddle is None:
+        z, p = _recurrent_point(runs, result.attractors, periods)
+        saddle = find_orbit(result.system, z, period=p) if z is not None else None
+        if saddle is not None and saddle.status == "equilibrium":
+            saddle = None  # Newton fell onto the rest point: no saddle orbit found
+    if saddle is None:
+        return np.full((1, result.system.n_state), np.nan), 0, np.nan, [], "none"
+    return saddle.points, saddle.period, saddle.T, saddle.multipliers, saddle.status
+
+
 def _splits(runs_a: list, runs_b: list, split: float) -> tuple:
     """First crossing (and its time) where the two runs of a bracket differ by > split."""
     k_split = np.full(len(runs_a), -1, dtype=int)
@@ -396,7 +410,6 @@ def edge_check(
     store : bool
         Write ``/basins/edge`` into the result's file.
     """
-    from .orbits import find_orbit
     from .simulate import simulate
 
     b = result.boundary
@@ -417,16 +430,7 @@ def edge_check(
     ctrl_cells = np.flatnonzero(~bm.boundary_cells(result.labels).ravel())
     ctrl = np.sort(rng.choice(ctrl_cells, min(len(pick), ctrl_cells.size), replace=False))
     controls = run(result.starts[ctrl])
-    if saddle is None:
-        z, p = _recurrent_point(runs, result.attractors, tuple(periods))
-        saddle = find_orbit(result.system, z, period=p) if z is not None else None
-        if saddle is not None and saddle.status == "equilibrium":
-            saddle = None  # Newton fell onto the rest point: no saddle orbit found
-    if saddle is None:
-        sp, per, T, mult, st = np.full((1, result.system.n_state), np.nan), 0, np.nan, [], "none"
-    else:
-        sp, per, T = saddle.points, saddle.period, saddle.T
-        mult, st = saddle.multipliers, saddle.status
+    sp, per, T, mult, st = _saddle(result, runs, saddle, tuple(periods))
     width = max([1, *(len(r.poincare) for r in runs)])
     dist, tmin = _distances(runs, sp, width)
     cdist, _ = _distances(controls, sp, max([1, *(len(r.poincare) for r in controls)]))
