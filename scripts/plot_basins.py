@@ -156,7 +156,8 @@ def draw_entropy(ax: Any, data: list[dict]) -> None:
     eta = np.array([k for k, _ in key])
     sb = np.array([d["attrs"]["basin_entropy"] for _, d in key])
     sbb = np.array([d["attrs"]["boundary_basin_entropy"] for _, d in key])
-    ax.plot(eta, sb, "o-", label="$S_b$ (basin entropy)")
+    cells = sorted({f"{d['label'].shape[0]}×{d['label'].shape[1]}" for _, d in key})
+    ax.plot(eta, sb, "o-", label=f"$S_b$ (basin entropy; {', '.join(cells)} cells)")
     ax.plot(eta, sbb, "s--", label="$S_{bb}$ (boundary basin entropy)")
     ax.axhline(np.log(2), color="grey", lw=0.8, ls=":", label="ln 2 (log-2 criterion)")
     ax.set_xlabel("η")
@@ -171,12 +172,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("-o", "--output", required=True, metavar="FIG.png")
     p.add_argument("--cols", type=int, default=None, help="panels per row")
     p.add_argument("--entropy", action="store_true", help="add the entropy-against-eta panel")
+    p.add_argument("--entropy-files", nargs="+", default=None, metavar="BASINS.h5",
+                   help="draw the entropy panel from these files (e.g. a scan over eta at one "
+                        "resolution) instead of the mapped ones; implies --entropy")  # fmt: skip
     p.add_argument("--title", default=None, help="figure title")
     p.add_argument("--colours", choices=("id", "kind"), default="id",
                    help="id: the census figures' track colours (default); kind: one colour "
                         "per kind and period, the same in every panel")  # fmt: skip
     args = p.parse_args(argv)
     data = [read(f) for f in args.files]
+    args.entropy = args.entropy or args.entropy_files is not None
     n = len(data) + int(args.entropy)
     cols = args.cols or min(n, 3)
     rows = -(-n // cols)
@@ -184,7 +189,8 @@ def main(argv: list[str] | None = None) -> int:
     for ax, d in zip(axes.flat, data):
         draw_map(ax, d, args.colours)
     if args.entropy:
-        draw_entropy(axes.flat[len(data)], data)
+        extra = [read(f) for f in args.entropy_files] if args.entropy_files else data
+        draw_entropy(axes.flat[len(data)], extra)
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
     if args.title:
