@@ -6,7 +6,7 @@ a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
 Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`,
-:func:`census`; periodic orbits and their multipliers: :func:`find_orbit`,
+:func:`census`, :func:`basins`; periodic orbits and their multipliers: :func:`find_orbit`,
 :func:`find_equilibrium`, :func:`continue_orbit`, :func:`continue_equilibrium` (docs/orbits.md).
 """
 
@@ -18,6 +18,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
+from .analysis.basins import BasinsResult, basins, load_basins
 from .analysis.census import CensusResult, census, load_census
 from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .analysis.sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
@@ -47,6 +48,9 @@ __all__ = [
     "census",
     "CensusResult",
     "load_census",
+    "basins",
+    "BasinsResult",
+    "load_basins",
     "MODES",
     "largest_lyapunov",
     "LyapunovResult",

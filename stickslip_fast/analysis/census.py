@@ -220,6 +220,8 @@ def census(
     track_threshold: float = DEFAULT_TRACK_THRESHOLD,
     title: str = "",
     notes: str = "",
+    _config_extra: dict | None = None,
+    _desc: str | None = None,
 ) -> CensusResult:
     """Every attractor at every value of ``param``, with its basin fraction.
 
@@ -299,6 +301,8 @@ def census(
         period_tol=period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
     config = _census_config(system, param, vals, start_arr, stop, settings, backend)
+    if _config_extra:  # callers built on the census (basins) add their own fields
+        config.update(_config_extra)
     layout = CensusLayout(
         param, vals, start_arr, settings.max_points, system.state_names, stop == "converged"
     )
@@ -321,7 +325,7 @@ def census(
             file = None
             done = np.zeros((n_v, n_s), dtype=bool)
             mem = CensusFile.empty_arrays(layout)
-        bar = _census_bar(stack, progress, done, param)
+        bar = _census_bar(stack, progress, done, _desc or f"census {param}")
         units = _units(vals, start_arr, done, chunk_size, nthreads)
         results = stack.enter_context(
             contextlib.closing(runner(units, system, (param,), y0, settings))
@@ -425,7 +429,7 @@ def _census_chunk_size(chunk_size, backend, runner, nthreads) -> int:
     return chunk_size
 
 
-def _census_bar(stack, progress, done, param):
+def _census_bar(stack, progress, done, desc):
     """A progress bar over the pairs still to run (None when not shown)."""
     n_todo = int(done.size - done.sum())
     show = sys.stderr.isatty() if progress is None else bool(progress)
@@ -435,7 +439,7 @@ def _census_bar(stack, progress, done, param):
 
         bar = stack.enter_context(
             tqdm(total=done.size, initial=done.size - n_todo, unit="run",
-                 desc=f"census {param}", dynamic_ncols=True, smoothing=0.1)
+                 desc=desc, dynamic_ncols=True, smoothing=0.1)
         )  # fmt: skip
     return bar
 

@@ -1,4 +1,4 @@
-"""Command line: ``stickslip-fast simulate | sweep | census | continue | info`` (and ``--version``).
+"""Command line: ``stickslip-fast simulate | sweep | census | basins | continue | info`` (and ``--version``).
 
 A thin layer over the public API: it parses a TOML config (see
 :mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
@@ -159,6 +159,12 @@ def _cmd_census(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_basins(args: argparse.Namespace) -> int:
+    from .basins import cmd_basins
+
+    return cmd_basins(_config_from_args(args), args)
+
+
 def _cmd_info(args: argparse.Namespace) -> int:
     from ..io import file_kind
 
@@ -171,7 +177,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
         print(b.summary())
         return 0
     if file_kind(args.file) == "census":
-        print(_census_report(args.file))
+        from .basins import basins_report, is_basins_file
+
+        print(basins_report(args.file) if is_basins_file(args.file) else _census_report(args.file))
         if args.json:
             import h5py
 
@@ -235,6 +243,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_batch_options(p, "runs go", "(value, start)")
     p.set_defaults(func=_cmd_census)
 
+    p = sub.add_parser("basins", help="basins of attraction on a plane of starts (resumable)")
+    _add_batch_options(p, "runs go", "cell")
+    p.set_defaults(func=_cmd_basins)
+
     p = sub.add_parser(
         "continue",
         help="follow a periodic orbit in one parameter into a branch file (docs/orbits.md)",
@@ -292,7 +304,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         # the compiled work stops within about a second (interrupt.call_interruptible)
         out = getattr(args, "output", None)
-        if args.command in ("sweep", "census") and out is not None and Path(out).exists():
+        if args.command in ("sweep", "census", "basins") and out is not None and Path(out).exists():
             msg = (
                 f"stickslip-fast: interrupted; finished chunks are in {out}, "
                 "run the same command again to resume"

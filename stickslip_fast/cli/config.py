@@ -99,6 +99,7 @@ _SECTIONS = {
         "param", "values", "n_starts", "seed", "include_zero", "box", "starts", "stop",
         "chunk_size", "identity_tol", "track_threshold",
     },
+    "basins": None,  # keys checked by cli.basins.parse_basins_table
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
         "max_points", "tol", "switch", "sharp_ends",
@@ -121,6 +122,7 @@ class RunConfig:
     sweep: dict[str, Any] | None = None
     census: dict[str, Any] | None = None
     continuation: dict[str, Any] | None = None
+    basins: dict[str, Any] | None = None
     title: str = ""
     notes: str = ""
     source: str = ""
@@ -189,6 +191,11 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
     sweep = _parse_sweep(dict(data["sweep"])) if "sweep" in data else None
     census = _parse_census(data["census"]) if "census" in data else None
     continuation = _parse_continue(data["continue"]) if "continue" in data else None
+    basins = None
+    if "basins" in data:
+        from .basins import parse_basins_table
+
+        basins = parse_basins_table(data["basins"])
 
     title = data.get("title", "")
     notes = data.get("notes", "")
@@ -202,6 +209,7 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
         sweep=sweep,
         census=census,
         continuation=continuation,
+        basins=basins,
         title=title,
         notes=notes,
         source=source,

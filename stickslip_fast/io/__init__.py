@@ -84,6 +84,7 @@ from .base import (  # noqa: F401
     open_h5,
     writer_alive,
 )
+from .basins import read_basins_extras, read_basins_meta, write_basins  # noqa: F401
 from .census import (  # noqa: F401
     CENSUS_RUN_FIELDS,
     CensusFile,

@@ -1,0 +1,305 @@
+"""The boundary of a basin map: bisection refinement and the saddle ("edge tracking") check.
+
+:func:`refine_boundary` bisects the segment between neighbouring cells of
+different labels, running the midpoints with the engine (all active segments of
+one bisection step in one parallel batch), until the bracket is shorter than
+``tol``. Its end points straddle the boundary: two starts ``tol`` apart that
+reach different attractors.
+
+:func:`stickslip_fast.bifurcation.basin_saddles.edge_check` (it needs the
+orbit solver, a layer above) follows trajectories from refined boundary points. A start on
+the boundary between two basins stays on it; if the boundary is the stable
+manifold of a saddle orbit, the trajectory goes to that saddle and lingers near
+it (for as long as its distance from the boundary, at most ``tol``, takes to
+grow by the saddle's unstable multiplier) before it falls to one side. The check
+finds the orbit the boundary trajectories linger at (Newton on the return map
+from their most nearly recurrent Poincare point, or an orbit given, e.g. from
+:func:`stickslip_fast.continue_orbit`), and measures how close they come to it,
+for how many crossings, against control trajectories from cells away from the
+boundary (docs/basins.md).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import basins_measures as bm
+
+__all__ = ["Boundary", "refine_boundary", "EdgeCheck"]
+
+
+@dataclass
+class Boundary:
+    """Refined boundary segments of a basin map (plane coordinates).
+
+    Attributes
+    ----------
+    u, v : ndarray (m,)
+        The refined boundary points (bracket midpoints).
+    ua, ub : ndarray (m, 2)
+        The final bracket: ``ua`` reaches ``label_a``, ``ub`` reaches ``label_b``.
+    label_a, label_b : ndarray of int (m,)
+    status : ndarray of int (m,)
+        0: refined to ``tol``; 1: a midpoint reached a third outcome (another
+        attractor or a failed run), the bracket stops there.
+    tol : float
+        Bracket length reached (plane units).
+    n_pairs : int
+        Differently labelled neighbour pairs on the map (the segments are a
+        seeded sample of them when more than ``max_segments``).
+    n_runs : int
+        Engine runs the refinement took.
+    seed : int
+    """
+
+    u: np.ndarray
+    v: np.ndarray
+    ua: np.ndarray
+    ub: np.ndarray
+    label_a: np.ndarray
+    label_b: np.ndarray
+    status: np.ndarray
+    tol: float
+    n_pairs: int
+    n_runs: int
+    seed: int
+
+    def to_group(self, g: Any) -> None:
+        from ..io.basins import write_group
+
+        seg = ("segment",)
+        write_group(
+            g, {"segment": (np.arange(len(self.u), dtype="i4"), "refined boundary segment")},
+            {
+                "u": (self.u, seg, "refined boundary point, first axis"),
+                "v": (self.v, seg, "refined boundary point, second axis"),
+                "u_a": (self.ua[:, 0], seg, "bracket end reaching label_a, first axis"),
+                "v_a": (self.ua[:, 1], seg, "bracket end reaching label_a, second axis"),
+                "u_b": (self.ub[:, 0], seg, "bracket end reaching label_b, first axis"),
+                "v_b": (self.ub[:, 1], seg, "bracket end reaching label_b, second axis"),
+                "label_a": (self.label_a.astype("i4"), seg, "attractor id on side a"),
+                "label_b": (self.label_b.astype("i4"), seg, "attractor id on side b"),
+                "status": (self.status.astype("i1"), seg,
+                           "0: refined to tol; 1: a third outcome met (bracket stopped)"),
+            },
+            {"tol": self.tol, "n_pairs": self.n_pairs, "n_runs": self.n_runs, "seed": self.seed},
+        )  # fmt: skip
+
+    @classmethod
+    def from_group(cls, g: Any) -> Boundary:
+        r = {k: g[k][...] for k in ("u", "v", "u_a", "v_a", "u_b", "v_b", "label_a", "label_b",
+                                    "status")}  # fmt: skip
+        return cls(
+            r["u"], r["v"], np.stack([r["u_a"], r["v_a"]], 1), np.stack([r["u_b"], r["v_b"]], 1),
+            r["label_a"], r["label_b"], r["status"], float(g.attrs["tol"]),
+            int(g.attrs["n_pairs"]), int(g.attrs["n_runs"]), int(g.attrs["seed"]),
+        )  # fmt: skip
+
+
+def _segments(result: Any, max_segments: int | None, seed: int) -> tuple:
+    pairs = bm.boundary_pairs(result.labels)
+    n_pairs = len(pairs)
+    if max_segments is not None and n_pairs > max_segments:
+        pick = np.sort(np.random.default_rng(seed).choice(n_pairs, max_segments, replace=False))
+        pairs = pairs[pick]
+    ua = np.stack([result.g1[pairs[:, 0]], result.g2[pairs[:, 1]]], axis=1)
+    ub = np.stack([result.g1[pairs[:, 2]], result.g2[pairs[:, 3]]], axis=1)
+    la = result.labels[pairs[:, 0], pairs[:, 1]].astype(np.int32)
+    lb = result.labels[pairs[:, 2], pairs[:, 3]].astype(np.int32)
+    return ua, ub, la, lb, n_pairs
+
+
+def refine_boundary(
+    result: Any,
+    *,
+    tol: float | None = None,
+    max_segments: int | None = 400,
+    seed: int = 0,
+    threads: int | None = None,
+    progress: bool | None = None,
+    store: bool = True,
+) -> Boundary:
+    """Refine the boundary of a basin map by bisection between differently labelled cells.
+
+    Parameters
+    ----------
+    result : BasinsResult
+    tol : float, optional
+        Final bracket length in plane units (default: 1/64 of g1's step).
+    max_segments : int or None
+        Refine a seeded sample of at most this many neighbour pairs (None: all).
+    seed : int
+        Seed of that sample.
+    threads, progress
+        As for :func:`basins` (the runs do not depend on ``threads``).
+    store : bool
+        Write ``/basins/boundary`` into the result's file (if it has one).
+
+    Returns
+    -------
+    Boundary
+        Also set as ``result.boundary``.
+    """
+    step = float(np.min(np.diff(result.g1)))
+    tol = step / 64.0 if tol is None else float(tol)
+    if not np.isfinite(tol) or tol <= 0:
+        raise ValueError(f"tol must be a number > 0, got {tol!r}")
+    if max_segments is not None and (isinstance(max_segments, bool) or max_segments < 1):
+        raise ValueError(f"max_segments must be an integer >= 1 or None, got {max_segments!r}")
+    ua, ub, la, lb, n_pairs = _segments(result, max_segments, seed)
+    status = np.zeros(len(ua), dtype=np.int8)
+    length = np.max(np.linalg.norm(ub - ua, axis=1)) if len(ua) else 0.0
+    n_iter = int(np.ceil(np.log2(length / tol))) if length > tol else 0
+    n_runs = 0
+    bar = None
+    if (progress if progress is not None else False) and n_iter:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n_iter, desc="boundary bisection", unit="step")
+    for _ in range(n_iter):
+        act = np.flatnonzero((status == 0) & (np.linalg.norm(ub - ua, axis=1) > tol))
+        if act.size == 0:
+            break
+        mid = 0.5 * (ua[act] + ub[act])
+        lm = result.label_plane(mid, threads=threads)
+        n_runs += act.size
+        to_a, to_b = lm == la[act], lm == lb[act]
+        ua[act[to_a]] = mid[to_a]
+        ub[act[to_b]] = mid[to_b]
+        status[act[~(to_a | to_b)]] = 1
+        if bar is not None:
+            bar.update()
+    if bar is not None:
+        bar.close()
+    c = 0.5 * (ua + ub)
+    b = Boundary(c[:, 0], c[:, 1], ua, ub, la, lb, status, tol, n_pairs, n_runs, int(seed))
+    result.boundary = b
+    if store and result.path is not None:
+        from ..io.basins import replace_subgroup
+
+        with replace_subgroup(result.path, "boundary") as h5:
+            b.to_group(h5["basins"].create_group("boundary"))
+    return b
+
+
+# ------------------------------------------------------------------ the saddle check
+@dataclass
+class EdgeCheck:
+    """Do boundary trajectories linger at a saddle orbit? (see :func:`edge_check`).
+
+    Attributes
+    ----------
+    saddle_points : ndarray (p, n_state)
+        The saddle orbit's Poincare points (NaN when none was found).
+    saddle_period : int
+    saddle_T : float
+    saddle_multipliers : ndarray of complex
+    saddle_status : str
+        ``Orbit.status`` of the Newton solve ("given" for an orbit passed in).
+    u, v : ndarray (m,)
+        Boundary starts followed.
+    min_distance : ndarray (m,)
+        Closest approach of each one's Poincare points to the saddle's (max norm).
+    t_min : ndarray (m,)
+        Time of that closest approach.
+    n_near : ndarray of int (m,)
+        Crossings within ``near`` of the saddle.
+    control_min_distance : ndarray (mc,)
+        The same closest approach for starts at cells away from the boundary.
+    control_n_near : ndarray of int (mc,)
+    near : float
+    split_crossing : ndarray of int (m,)
+        First crossing at which the runs from the two ends of the bracket (at
+        most ``tol`` apart) are more than ``split`` apart (max norm): how long
+        the pair stays on the boundary (-1: never within the run).
+    t_split : ndarray (m,)
+        Time of that crossing (NaN: never).
+    split : float
+    distances : ndarray (m, K)
+        Distance of every crossing of every boundary trajectory (NaN-padded).
+    """
+
+    saddle_points: np.ndarray
+    saddle_period: int
+    saddle_T: float
+    saddle_multipliers: np.ndarray
+    saddle_status: str
+    u: np.ndarray
+    v: np.ndarray
+    min_distance: np.ndarray
+    t_min: np.ndarray
+    n_near: np.ndarray
+    control_min_distance: np.ndarray
+    control_n_near: np.ndarray
+    near: float
+    split_crossing: np.ndarray
+    t_split: np.ndarray
+    split: float
+    distances: np.ndarray = field(repr=False)
+
+    @property
+    def summary(self) -> dict[str, float]:
+        """Medians of the boundary and control statistics (NaN without a saddle)."""
+
+        def med(a: np.ndarray) -> float:
+            a = np.asarray(a, dtype=float)
+            return float(np.median(a[np.isfinite(a)])) if np.isfinite(a).any() else np.nan
+
+        return {
+            "boundary_median_min_distance": med(self.min_distance),
+            "control_median_min_distance": med(self.control_min_distance),
+            "boundary_median_n_near": float(np.median(self.n_near)),
+            "control_median_n_near": float(np.median(self.control_n_near)),
+            "boundary_share_near": float(np.mean(self.n_near > 0)),
+            "control_share_near": float(np.mean(self.control_n_near > 0)),
+            "median_split_crossing": float(np.median(self.split_crossing)),
+            "median_t_split": med(self.t_split),
+        }
+
+    def to_group(self, g: Any) -> None:
+        from ..io.basins import write_group
+
+        m = len(self.u)
+        mult = np.asarray(self.saddle_multipliers)
+        write_group(
+            g,
+            {"track": (np.arange(m, dtype="i4"), "boundary trajectory"),
+             "control": (np.arange(len(self.control_min_distance), dtype="i4"), "control"),
+             "crossing": (np.arange(self.distances.shape[1], dtype="i4"), "Poincare crossing"),
+             "saddle_point": (np.arange(len(self.saddle_points), dtype="i4"), "saddle point"),
+             "state": (g.parent["state"][...], "state variable")},
+            {"u": (self.u, ("track",), "start, first axis"),
+             "v": (self.v, ("track",), "start, second axis"),
+             "min_distance": (self.min_distance, ("track",), "closest approach to the saddle"),
+             "t_min": (self.t_min, ("track",), "time of the closest approach"),
+             "n_near": (self.n_near.astype("i4"), ("track",), "crossings within near"),
+             "split_crossing": (self.split_crossing.astype("i4"), ("track",),
+                                "first crossing where the bracket's two runs differ by > split"),
+             "t_split": (self.t_split, ("track",), "time of that crossing"),
+             "distances": (self.distances, ("track", "crossing"), "distance per crossing"),
+             "control_min_distance": (self.control_min_distance, ("control",),
+                                      "closest approach from cells away from the boundary"),
+             "control_n_near": (self.control_n_near.astype("i4"), ("control",),
+                                "crossings within near, controls"),
+             "saddle_points": (self.saddle_points, ("saddle_point", "state"),
+                               "the saddle orbit's Poincare points")},
+            {"saddle_period": self.saddle_period, "saddle_T": self.saddle_T,
+             "saddle_status": self.saddle_status, "near": self.near, "split": self.split,
+             "saddle_multipliers": json.dumps([[z.real, z.imag] for z in mult.tolist()])},
+        )  # fmt: skip
+
+    @classmethod
+    def from_group(cls, g: Any) -> EdgeCheck:
+        a = g.attrs
+        mult = np.array([complex(*z) for z in json.loads(a["saddle_multipliers"])])
+        return cls(
+            g["saddle_points"][...], int(a["saddle_period"]), float(a["saddle_T"]), mult,
+            str(a["saddle_status"]), g["u"][...], g["v"][...], g["min_distance"][...],
+            g["t_min"][...], g["n_near"][...], g["control_min_distance"][...],
+            g["control_n_near"][...], float(a["near"]), g["split_crossing"][...],
+            g["t_split"][...], float(a["split"]), g["distances"][...],
+        )  # fmt: skip

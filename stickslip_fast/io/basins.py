@@ -1,0 +1,175 @@
+"""Basins files: a one-value census file plus a ``/basins`` group (docs/basins.md).
+
+A basins file is a census file (root attribute ``kind = "census"``, one value of
+``eta``, one start per cell, row-major: cell (i, j) is start ``i * n2 + j``), so
+the census datasets, resume, configuration check and classification are the
+census's; its configuration (root ``config``) also holds ``"kind": "basins"`` and
+the grid, plane and base. The ``/basins`` group, written once the map is
+complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
+
+    /basins                    attrs: axis_names (JSON), eta, entropy_box, and the
+                               measures: basin_entropy, boundary_basin_entropy,
+                               boundary_box_fraction, uncertainty_exponent(_stderr),
+                               boundary_dimension, n_basins, wada, failed_fraction
+      u (n1), v (n2)           coordinates along the two axes (attrs long_name)
+      state (S)                state names
+      label (u, v)       i4    attractor id per cell (-1: failed)
+      base (state)       f8    the state whose other coordinates the plane keeps
+      directions (direction, state)  the two axis vectors
+      attractor (A)            scale; id, kind (flag_values / flag_meanings),
+                               period, count, fraction, fraction_stderr (attractor)
+      points (attractor, orbit_point, state)   as the census's /attractors/points
+      k (K); eps (k); uncertain_fraction (k)   the uncertainty exponent's data
+      radius (R); wada_fraction (radius)       the grid Wada test
+      boundary/                (optional) refined boundary segments: segment scale;
+                               u, v (the refined point), u_a, v_a, u_b, v_b (the
+                               final bracket), label_a, label_b, status
+                               (0 refined to tol, 1 a third outcome met); attrs tol,
+                               n_pairs, n_runs, seed
+      edge/                    (optional) the saddle check: see analysis.basins_boundary.EdgeCheck
+
+Every dataset has its dimensions attached, so
+``xarray.open_dataset(path, group="basins", engine="h5netcdf")`` reads it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+__all__ = ["write_basins", "read_basins_meta", "read_basins_extras", "write_group"]
+
+_KEEP = ("boundary", "edge")
+
+
+def _scale(g: h5py.Group, name: str, data: Any, long_name: str, **kw: Any) -> h5py.Dataset:
+    d = g.create_dataset(name, data=data, **kw)
+    d.make_scale(name)
+    d.attrs["long_name"] = long_name
+    return d
+
+
+def _put(g: h5py.Group, name: str, data: Any, dims: tuple, desc: str, **kw: Any) -> None:
+    d = g.create_dataset(name, data=data, **kw)
+    for i, dim in enumerate(dims):
+        d.dims[i].attach_scale(g[dim])
+    d.attrs["description"] = desc
+
+
+def write_group(g: h5py.Group, scales: dict, columns: dict, attrs: dict) -> None:
+    """Fill group ``g``: ``scales`` {name: (data, long_name)}, ``columns`` {name:
+    (data, dims, description)}, scalar ``attrs`` (None values are skipped)."""
+    for name, (data, long_name) in scales.items():
+        _scale(g, name, data, long_name)
+    for name, (data, dims, desc) in columns.items():
+        _put(g, name, data, dims, desc)
+    for k, v in attrs.items():
+        if v is not None:
+            g.attrs[k] = v
+
+
+def write_basins(path: str | Path, result: Any, kinds: tuple[str, ...]) -> None:
+    """Write (or rewrite) the ``/basins`` group of a finished basins file.
+
+    ``kinds`` are the attractor kinds in code order (the census's ``KINDS``;
+    passed in, since io sits below the analysis layer that defines them).
+    """
+    KINDS = kinds  # noqa: N806
+
+    m = result.measures()
+    fr = result.fractions(stderr=True)
+    ue = result.uncertainty_exponent()
+    w = result.wada()
+    atts = result.attractors
+    n = result.system.n_state
+    width = max([1, *(len(a.points) for a in atts)])
+    pts = np.full((len(atts), width, n), np.nan)
+    for r, a in enumerate(atts):
+        pts[r, : len(a.points)] = a.points
+    with h5py.File(path, "r+", libver="latest") as h5:
+        g = h5.require_group("basins")
+        for name in list(g):
+            if name not in _KEEP:
+                del g[name]
+        g.attrs["description"] = "Basins of attraction on a plane of starts (docs/basins.md)"
+        g.attrs["axis_names"] = json.dumps(result.axis_names)
+        g.attrs["eta"] = float(result.system.eta)
+        for k, v in m.items():
+            g.attrs[k] = v
+        names = np.array(result.system.state_names, dtype=object)
+        _scale(g, "u", result.g1, f"{result.axis_names[0]}(0): first axis of the plane")
+        _scale(g, "v", result.g2, f"{result.axis_names[1]}(0): second axis of the plane")
+        _scale(g, "state", names, "state variable", dtype=h5py.string_dtype())
+        _scale(g, "direction", np.arange(2, dtype="i4"), "axis of the plane")
+        _scale(g, "attractor", np.arange(len(atts), dtype="i4"), "row of the attractor table")
+        _scale(g, "orbit_point", np.arange(width, dtype="i4"), "point of the orbit")
+        _scale(g, "k", ue.eps / max(float(np.mean(np.diff(result.g1))), 1e-300),
+               "pair distance in cells")  # fmt: skip
+        _scale(g, "radius", w.radii.astype("i4"), "half-width of the neighbourhood (cells)")
+        _put(g, "label", result.labels.astype("i4"), ("u", "v"),
+             "attractor id per cell (the census's ids); -1: failed run")  # fmt: skip
+        _put(g, "base", result.base, ("state",), "state whose other coordinates the plane keeps")
+        _put(g, "directions", result.directions, ("direction", "state"), "axis vectors")
+        cols = {
+            "id": (np.array([a.id for a in atts], dtype="i4"), "attractor id (census track)"),
+            "kind": (np.array([KINDS.index(a.kind) for a in atts], dtype="i1"), "kind"),
+            "period": (np.array([a.period for a in atts], dtype="i4"), "period (0: none)"),
+            "count": (np.array([a.count for a in atts], dtype="i4"), "cells reaching it"),
+            "fraction": (np.array([a.fraction for a in atts], dtype="f8"), "basin fraction"),
+            "fraction_stderr": (np.array([fr[a.id][1] for a in atts], dtype="f8"),
+                                "binomial standard error sqrt(f (1 - f) / n_cells)"),
+        }  # fmt: skip
+        for name, (arr, desc) in cols.items():
+            _put(g, name, arr, ("attractor",), desc)
+        g["kind"].attrs["flag_values"] = np.arange(len(KINDS), dtype="i1")
+        g["kind"].attrs["flag_meanings"] = " ".join(KINDS)
+        _put(
+            g,
+            "points",
+            pts,
+            ("attractor", "orbit_point", "state"),
+            "Poincare points of each attractor (as the census's /attractors/points)",
+        )
+        _put(g, "eps", ue.eps, ("k",), "pair distance in plane units")
+        _put(g, "uncertain_fraction", ue.f, ("k",), "share of cell pairs with different labels")
+        _put(g, "wada_fraction", w.fraction, ("radius",),
+             "share of boundary cells whose neighbourhood holds every basin")  # fmt: skip
+        h5.flush()
+
+
+def read_basins_meta(path: str | Path) -> tuple[dict, int | None]:
+    """The grid, plane and base of a basins file (from its configuration), and its box."""
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        cfg = json.loads(h5.attrs["config"])
+        if cfg.get("kind") != "basins":
+            raise ValueError(f"{path}: not a stickslip_fast basins file (a census file?)")
+        box = int(h5["basins"].attrs["entropy_box"]) if "basins" in h5 else None
+    return cfg["basins"], box
+
+
+def read_basins_extras(path: str | Path, boundary_cls: Any, edge_cls: Any) -> tuple[Any, Any]:
+    """The refined boundary and the saddle check stored in a basins file, or None.
+
+    Built by the records' ``from_group`` (``Boundary`` and ``EdgeCheck`` of the
+    analysis layer, passed in).
+    """
+    Boundary, EdgeCheck = boundary_cls, edge_cls  # noqa: N806
+
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        g = h5.get("basins")
+        b = Boundary.from_group(g["boundary"]) if g is not None and "boundary" in g else None
+        e = EdgeCheck.from_group(g["edge"]) if g is not None and "edge" in g else None
+    return b, e
+
+
+def replace_subgroup(path: str | Path, name: str) -> h5py.File:
+    """Open ``path`` for writing with ``/basins/<name>`` deleted (the caller refills it)."""
+    h5 = h5py.File(path, "r+", libver="latest")
+    g = h5.require_group("basins")
+    if name in g:
+        del g[name]
+    return h5
