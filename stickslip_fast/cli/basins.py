@@ -38,7 +38,7 @@ _EDGE = {"n_tracks": int, "t_end": float, "near": float, "seed": int}
 
 
 def _sub(table: Any, name: str, types: dict) -> dict:
-    from .config import ConfigError
+    from .config_values import ConfigError
 
     if not isinstance(table, dict):
         raise ConfigError(f"[basins.{name}] must be a table")
@@ -55,7 +55,7 @@ def _sub(table: Any, name: str, types: dict) -> dict:
 
 def parse_basins_table(table: dict[str, Any]) -> dict[str, Any]:
     """Validate a ``[basins]`` table (types only; :func:`basins` checks the values)."""
-    from .config import ConfigError, _values_from_spec
+    from .config_values import ConfigError, _values_from_spec
 
     unknown = set(table) - BASINS_KEYS
     if unknown:
@@ -104,7 +104,7 @@ def cmd_basins(cfg: Any, args: Any) -> int:
     """Run a ``[basins]`` config into ``args.output`` (the CLI's ``basins`` command)."""
     from ..analysis.basins import basins
     from ..bifurcation.basin_saddles import edge_check
-    from .config import ConfigError
+    from .config_values import ConfigError
 
     if cfg.basins is None:
         raise ConfigError(f"{cfg.source}: a basins map needs a [basins] section with g1 and g2")

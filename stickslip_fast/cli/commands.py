@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..base.version import package_version
 from .arguments import (  # noqa: F401
     _add_common,
     _check_writable,
@@ -219,9 +220,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="stickslip-fast",
         description="Bifurcation engine for coupled translational-rotational stick-slip oscillators.",
     )
-    from .. import __version__  # one source: the installed metadata (pyproject.toml's version)
-
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    # one source: the installed metadata (pyproject.toml's version), as stickslip_fast.__version__
+    parser.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("simulate", help="one trajectory: Poincare points and period")
     _add_common(p)

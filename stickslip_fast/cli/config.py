@@ -71,6 +71,7 @@ import numpy as np
 from ..base.messages import plain
 from ..core.settings import Settings
 from ..model.system import SWEEPABLE, System
+from .config_values import ConfigError, _values_from_spec  # noqa: F401  (re-exported)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -107,10 +108,6 @@ _SECTIONS = {
 }  # fmt: skip
 
 
-class ConfigError(ValueError):
-    """A configuration file has an unknown key or a bad value (the message names it)."""
-
-
 @dataclass
 class RunConfig:
     """A parsed configuration; see the module docstring for the file layout."""
@@ -145,29 +142,6 @@ def paper_order_to_state(values: Any, n_oscillators: int, vb: float | None) -> n
     if vb is not None:
         out = np.append(out, float(vb))
     return out
-
-
-def _values_from_spec(spec: Any, key: str) -> np.ndarray:
-    if isinstance(spec, dict):
-        unknown = sorted(set(spec) - {"start", "stop", "num"})
-        if unknown or not {"start", "stop", "num"} <= set(spec):
-            raise ConfigError(
-                f"{key} must be a list or {{start, stop, num}}, got keys {sorted(spec)}"
-            )
-        num = spec["num"]
-        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-            raise ConfigError(f"{key}.num must be an integer >= 1, got {plain(num)}")
-        for end in ("start", "stop"):
-            v = spec[end]
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(f"{key}.{end} must be a number, got {plain(v)}")
-        return np.linspace(float(spec["start"]), float(spec["stop"]), num)
-    if isinstance(spec, list) and spec:
-        for i, v in enumerate(spec):  # no "3.0" -> 3.0 or true -> 1.0 conversions
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(f"{key} must hold numbers, but {key}[{i}] is {plain(v)}")
-        return np.asarray(spec, dtype=float)
-    raise ConfigError(f"{key} must be a non-empty list or {{start, stop, num}}, got {plain(spec)}")
 
 
 def _analyses(value: Any) -> tuple[str, ...]:
