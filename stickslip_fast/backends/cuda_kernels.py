@@ -267,14 +267,14 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
         last_rejected = False
         jac_fresh = False
         jcorner = 0.0
-        # converged stopping (driver.converged_stop, operation for operation)
+        # converged stopping (stoprules.converged_stop, operation for operation)
         phase = 0  # 1: converged, recording the last points
         rest_since = math.nan
         d1_rest_since = math.nan
         last_cross = math.nan
         checked = -1
         target = 0
-        if not converged:  # a start at rest is at rest from t = 0, as driver._reset_stop
+        if not converged:  # a start at rest is at rest from t = 0, as stoprules.reset_stop
             at_rest0 = True
             for i in range(N_OSC):
                 if not (
@@ -382,7 +382,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                             pts[slot, i] = _dense_value(theta, y, ynew, D, i)
                         tpts[slot] = tc
                     n_cross += 1
-                    last_cross = t1  # the step's end, as driver.time_since_crossing
+                    last_cross = t1  # the step's end, as stoprules.time_since_crossing
             if t1 >= t_transient:
                 for i in range(NS):
                     vv = ynew[i]
@@ -404,7 +404,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 h *= fac
                 err_prev = max(en, 1e-10)
                 last_rejected = False
-            # ---- rest, tracked always (the classification reads it), as driver._track_rest
+            # ---- rest, tracked always (the classification reads it), as stoprules.track_rest
             if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
                 if math.isnan(d1_rest_since):
                     d1_rest_since = t
@@ -435,7 +435,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 rest_since = math.nan
             if not converged:
                 continue
-            # ---- converged stopping, as driver._converged_now
+            # ---- converged stopping, as stoprules.converged_now
             if phase == 1:
                 if n_cross >= target:
                     break

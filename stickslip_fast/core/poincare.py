@@ -117,11 +117,11 @@ def classify(
     ``rest_time`` is how long the run has been at rest at its end, < 0 if it
     is moving (at rest: every disk
     speed |dx_i|, |dphi_i| <= ``equilibrium_tol`` and the belt speed steady to
-    that tolerance; :func:`driver.rest_time`), ``tail`` the time over which rest
+    that tolerance; :func:`stoprules.rest_time`), ``tail`` the time over which rest
     must hold: ``dwell`` or, if shorter, the whole recording window;
     ``disk1_rest_time`` the same for disk 1 alone, whose local minima of x_1
     are the section; ``since_crossing`` the time since the last recorded
-    crossing (inf if none; :func:`driver.time_since_crossing`). Motion, and crossings, that died out
+    crossing (inf if none; :func:`stoprules.time_since_crossing`). Motion, and crossings, that died out
     before the tail never count.
 
     - at rest over the whole tail: "equilibrium", or "stalled" on a DC motor

@@ -104,7 +104,7 @@ def _all_finite(a) -> bool:
 
 
 #: The settings of a trajectory, as the kernels pass them on. ``stop_kind``:
-#: STOP_FIXED (run to t_end) or STOP_WHEN_CONVERGED (see :func:`driver.converged_stop`).
+#: STOP_FIXED (run to t_end) or STOP_WHEN_CONVERGED (see :func:`stoprules.converged_stop`).
 RunSettings = namedtuple(
     "RunSettings",
     [
@@ -320,7 +320,7 @@ def integrate(
     last accepted time), ``stat_i`` (steps, rejected, crossings, samples) and
     ``stat_f`` (final time, the :func:`motion_measure` of the recording window,
     time of convergence, time at rest at the end: -1 if moving). With ``rs.stop_kind`` STOP_WHEN_CONVERGED the run
-    ends once it has converged (see :func:`driver.converged_stop`). ``abort``
+    ends once it has converged (see :func:`stoprules.converged_stop`). ``abort``
     (int64[1]) ends the run with "interrupted" when set from another thread.
     """
     n = y0.size

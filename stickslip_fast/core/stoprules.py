@@ -1,0 +1,238 @@
+"""Stop rules of the driver: when a run ends, and what it has seen of rest and crossings.
+
+A stop rule is a record (:class:`StopRule`) that :func:`stop_now` asks after
+every accepted step. Every rule made for a trajectory (:func:`fixed_stop`,
+:func:`converged_stop`) also watches the run for the classification
+(:func:`~stickslip_fast.core.poincare.classify`): how long the disks, and disk 1
+alone, have been at rest (:func:`rest_time`, :func:`disk1_rest_time`) and when
+the last crossing was (:func:`time_since_crossing`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from ..base.jit import JIT
+from .poincare import ring_period
+
+__all__ = [
+    "StopRule",
+    "STOP_AT_END",
+    "STOP_AFTER_CROSSINGS",
+    "STOP_CONVERGED",
+    "simple_stop",
+    "fixed_stop",
+    "converged_stop",
+    "reset_stop",
+    "rest_time",
+    "disk1_rest_time",
+    "time_since_crossing",
+    "stop_now",
+]
+
+_JIT = JIT
+
+#: Slots of an observer's ``counts``: (crossings recorded, samples taken).
+C_CROSS, C_SAMPLES = 0, 1
+
+#: When to end a run before ``t_end``. ``kind``: STOP_AT_END (never),
+#: STOP_AFTER_CROSSINGS (once ``count`` crossings are recorded), or
+#: STOP_CONVERGED (see :func:`converged_stop`): the recorded points repeat with
+#: a period <= ``max_period`` to ``period_tol`` over ``min_repeats`` periods and
+#: at least ``min_points`` points, or the disks have been at rest (speeds, and
+#: the belt-speed range, <= ``equilibrium_tol``) for ``dwell`` time units; then
+#: max(min_points, 4 periods) more crossings are recorded, at most the ring
+#: buffer's capacity (orbit), or the run ends (rest).
+#: ``wmin``/``wmax`` (n,) and ``state`` (STATE_SIZE,) are its working memory.
+StopRule = namedtuple(
+    "StopRule",
+    [
+        "kind", "count", "period_tol", "max_period", "min_repeats", "min_points",
+        "equilibrium_tol", "dwell", "n_osc", "dc", "wmin", "wmax", "state",
+    ],
+)  # fmt: skip
+STOP_AT_END = 0
+STOP_AFTER_CROSSINGS = 1
+STOP_CONVERGED = 2
+# slots of StopRule.state
+S_PHASE, S_T_CONVERGED, S_REST_SINCE, S_CHECKED, S_TARGET, S_PERIOD = range(6)
+# rules that watch the run (n_osc > 0): the crossings seen, and the step end of the last one
+S_N_SEEN, S_LAST_CROSSING = 6, 7
+# ... and since when disk 1 (whose x1 minima are the section) has been at rest
+S_DISK1_REST_SINCE = 8
+STATE_SIZE = 9
+
+
+@njit(**_JIT)
+def simple_stop(kind: int, count: int, n: int) -> StopRule:
+    """A STOP_AT_END or STOP_AFTER_CROSSINGS rule."""
+    return StopRule(
+        kind, count, 0.0, 0, 0, 0, 0.0, 0.0, 0, False, np.empty(n), np.empty(n),
+        np.zeros(STATE_SIZE),
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def converged_stop(
+    period_tol, max_period, min_repeats, min_points, equilibrium_tol, dwell, n_osc, dc, n
+) -> StopRule:
+    """A STOP_CONVERGED rule (after convergence: max(min_points, 4 periods) more points)."""
+    return StopRule(
+        STOP_CONVERGED, 0, period_tol, max_period, min_repeats, min_points,
+        equilibrium_tol, dwell, n_osc, dc, np.empty(n), np.empty(n), np.zeros(STATE_SIZE),
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def fixed_stop(equilibrium_tol, n_osc, dc, n) -> StopRule:
+    """A STOP_AT_END rule that watches for rest (see :func:`rest_time`)."""
+    return StopRule(
+        STOP_AT_END, 0, 0.0, 0, 0, 0, equilibrium_tol, 0.0, n_osc, dc, np.empty(n), np.empty(n),
+        np.zeros(STATE_SIZE),
+    )  # fmt: skip
+
+
+@njit(**_JIT)
+def reset_stop(stop, y) -> None:
+    stop.state[S_PHASE] = 0.0
+    stop.state[S_T_CONVERGED] = np.nan
+    stop.state[S_REST_SINCE] = np.nan
+    stop.state[S_CHECKED] = -1.0
+    stop.state[S_TARGET] = 0.0
+    stop.state[S_PERIOD] = 0.0
+    stop.state[S_N_SEEN] = 0.0
+    stop.state[S_LAST_CROSSING] = np.nan
+    stop.state[S_DISK1_REST_SINCE] = np.nan
+    if stop.kind == STOP_AT_END and stop.n_osc > 0:
+        track_rest(stop, 0.0, y)  # a start at rest is at rest from t = 0
+
+
+@njit(**_JIT)
+def rest_time(stop, t: float) -> float:
+    """How long the run has been at rest at time ``t``; -1.0 if it is moving.
+
+    At rest: every disk speed |dx_i|, |dphi_i| <= ``equilibrium_tol`` and, on a
+    DC motor, the belt speed's range since then <= ``equilibrium_tol``. Tracked
+    by STOP_AT_END rules made by :func:`fixed_stop` and by STOP_CONVERGED rules
+    (those from the first step on); -1.0 for other rules.
+    """
+    return _elapsed(stop.state[S_REST_SINCE], t, -1.0)
+
+
+@njit(**_JIT)
+def disk1_rest_time(stop, t: float) -> float:
+    """As :func:`rest_time`, for disk 1 alone (|dx_1|, |dphi_1| <= ``equilibrium_tol``)."""
+    return _elapsed(stop.state[S_DISK1_REST_SINCE], t, -1.0)
+
+
+@njit(**_JIT)
+def time_since_crossing(stop, t: float) -> float:
+    """Time from the end of the step of the last recorded crossing to ``t`` (inf if none).
+
+    Tracked by the rules that :func:`rest_time` names.
+    """
+    return _elapsed(stop.state[S_LAST_CROSSING], t, np.inf)
+
+
+@njit(inline="always", **_JIT)
+def _elapsed(since: float, t: float, never: float) -> float:
+    """t - since, or ``never`` when ``since`` is unset (NaN)."""
+    if math.isnan(since):
+        return never
+    return t - since
+
+
+@njit(inline="always", **_JIT)
+def _at_rest(stop, y) -> bool:
+    tol = stop.equilibrium_tol
+    for i in range(stop.n_osc):
+        if not (abs(y[4 * i + 1]) <= tol and abs(y[4 * i + 3]) <= tol):
+            return False
+    return True
+
+
+@njit(inline="always", **_JIT)
+def track_rest(stop, t, y) -> bool:
+    """Update the start of the current stretch at rest (``S_REST_SINCE``); True if at rest.
+
+    ``wmin``/``wmax`` hold the state's range over the stretch; on a DC motor a
+    belt speed that varies by more than ``equilibrium_tol`` restarts it.
+    """
+    st = stop.state
+    n = y.size
+    tol = stop.equilibrium_tol
+    if abs(y[1]) <= tol and abs(y[3]) <= tol:
+        if math.isnan(st[S_DISK1_REST_SINCE]):
+            st[S_DISK1_REST_SINCE] = t
+    else:
+        st[S_DISK1_REST_SINCE] = np.nan
+    if not _at_rest(stop, y):
+        st[S_REST_SINCE] = np.nan
+        return False
+    if math.isnan(st[S_REST_SINCE]):
+        st[S_REST_SINCE] = t
+        for i in range(n):
+            stop.wmin[i] = y[i]
+            stop.wmax[i] = y[i]
+        return True
+    for i in range(n):
+        stop.wmin[i] = min(stop.wmin[i], y[i])
+        stop.wmax[i] = max(stop.wmax[i], y[i])
+    if stop.dc and stop.wmax[n - 1] - stop.wmin[n - 1] > stop.equilibrium_tol:
+        st[S_REST_SINCE] = t
+        for i in range(n):
+            stop.wmin[i] = y[i]
+            stop.wmax[i] = y[i]
+    return True
+
+
+@njit(inline="always", **_JIT)
+def converged_now(stop, obs, t, y) -> bool:
+    """STOP_CONVERGED: watch for rest and for repeating points; see :class:`StopRule`."""
+    st = stop.state
+    n = y.size
+    if st[S_PHASE] == 1.0:
+        if stop.n_osc > 0:
+            track_rest(stop, t, y)  # the run's classification reads the rest time
+        return obs.counts[C_CROSS] >= st[S_TARGET]
+    # rest: disk speeds within the tolerance, and the belt speed's range, for `dwell`
+    if track_rest(stop, t, y) and t - st[S_REST_SINCE] >= stop.dwell:
+        # the recording window is the dwell window
+        for i in range(n):
+            obs.ymin[i] = stop.wmin[i]
+            obs.ymax[i] = stop.wmax[i]
+        st[S_T_CONVERGED] = st[S_REST_SINCE]
+        return True
+    # repeating points: checked once per new crossing
+    c = obs.counts[C_CROSS]
+    if c != st[S_CHECKED]:
+        st[S_CHECKED] = c
+        per = ring_period(
+            obs.pts, c, stop.period_tol, stop.max_period, stop.min_repeats, stop.min_points
+        )
+        # at rest, dx1 flickers around 0 at round-off and gives repeating "points":
+        # rest is judged by its dwell window above, never from points
+        if per > 0 and not _at_rest(stop, y):
+            st[S_PHASE] = 1.0
+            st[S_T_CONVERGED] = t
+            st[S_PERIOD] = per
+            cap = obs.pts.shape[0]
+            st[S_TARGET] = min(cap, max(stop.min_points, 4 * per))
+            # a fresh recording window from here: the points after convergence
+            obs.counts[C_CROSS] = 0
+            for i in range(n):
+                obs.ymin[i] = y[i]
+                obs.ymax[i] = y[i]
+    return False
+
+
+# ------------------------------------------------------------------ section
+
+
+def stop_now(stop, obs, t, y):  # noqa: ARG001
+    """True to end the run after this step (the overload for the Poincare
+    observer is in :mod:`.driver`, beside that observer)."""
