@@ -64,7 +64,6 @@ from .stoprules import (  # noqa: F401  (re-exported: the stop rules used to liv
     STOP_CONVERGED,
     StopRule,
     converged_now,
-    track_rest,
     converged_stop,
     disk1_rest_time,
     fixed_stop,
@@ -73,6 +72,7 @@ from .stoprules import (  # noqa: F401  (re-exported: the stop rules used to liv
     simple_stop,
     stop_now,
     time_since_crossing,
+    track_rest,
 )
 
 __all__ = [
