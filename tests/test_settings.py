@@ -165,4 +165,4 @@ def test_cli_choices_come_from_the_package():
     sim = parser._subparsers._group_actions[0].choices["simulate"]  # noqa: SLF001
     opts = {a.dest: a for a in sim._actions}
     assert tuple(opts["method"].choices) == ssf.METHODS
-    assert tuple(opts["drive"].choices) == ssf.system.DRIVES
+    assert tuple(opts["drive"].choices) == ssf.model.system.DRIVES
