@@ -71,7 +71,7 @@ def simulate(
     max_steps: int | None = None,
     equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
     period_tol: float | None = None,
-    stop: str = "converged",
+    stop: str = "fixed",
     dwell: float | None = None,
 ) -> SimulationResult:
     """Integrate one trajectory and record its Poincare points.

@@ -366,7 +366,7 @@ def sweep(
     title: str = "",
     notes: str = "",
     analyses: Sequence[str] = (),
-    stop: str = "converged",
+    stop: str = "fixed",
     dwell: float | None = None,
 ) -> SweepResult:
     """Sweep one or two System fields and record the Poincare points of every value.
