@@ -86,7 +86,7 @@ def test_docstring_examples_of_the_public_names_run():
 
 def test_the_period_map_config_loads():
     # the README's period-map picture is made from it (its notes say how)
-    from stickslip_fast.config import load_config
+    from stickslip_fast.cli.config import load_config
 
     cfg = load_config(os.path.join(ROOT, "data", "maps", "period_map_eta_k12.toml"))
     assert tuple(cfg.sweep["param"]) == ("eta", "k12")
