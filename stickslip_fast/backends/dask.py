@@ -71,6 +71,11 @@ PLUGIN_NAME = "stickslip-fast-warmup"
 #: of a sweep and large enough that the ~ms per-task cost of Dask is negligible.
 DEFAULT_CHUNK_SIZE = 8
 
+#: Environment variable through which :func:`local_cluster` tells its workers
+#: their Numba thread count (our own name: Numba never reads it, so setting it
+#: cannot race with Numba's thread pool the way ``NUMBA_NUM_THREADS`` did).
+THREADS_ENV = "STICKSLIP_FAST_NUMBA_THREADS"
+
 #: Numba threads of each task in this worker process (None: Numba's default);
 #: set by :class:`WarmUpPlugin`. Numba's thread count is per calling thread, so
 #: the task sets it on the executor thread it runs in.
@@ -96,8 +101,9 @@ def warm_up(numba_threads: int | None = None) -> dict[str, Any]:
     Parameters
     ----------
     numba_threads : int, optional
-        Numba threads for every later task in this process (default: Numba's
-        own, i.e. ``NUMBA_NUM_THREADS`` or all cores).
+        Numba threads for every later task in this process (default: the
+        value :func:`local_cluster` put in ``STICKSLIP_FAST_NUMBA_THREADS``,
+        else Numba's own, i.e. ``NUMBA_NUM_THREADS`` or all cores).
 
     Returns
     -------
@@ -108,6 +114,8 @@ def warm_up(numba_threads: int | None = None) -> dict[str, Any]:
     global _task_threads
     t0 = time.perf_counter()
 
+    if numba_threads is None and os.environ.get(THREADS_ENV):
+        numba_threads = int(os.environ[THREADS_ENV])
     _task_threads = numba_threads
     threads = _set_task_threads()
     system = System.preset("asymmetric")
@@ -222,7 +230,10 @@ def local_cluster(n_workers: int | None = None, **kwargs: Any) -> Any:
     Numba (with the parent's environment) before Dask applies a cluster's
     ``env``, so setting it there raced with the warm-up's first compilation
     (about one two-worker cluster in six on a loaded 2-core machine). The
-    pool keeps Numba's default size; the idle threads cost nothing.
+    pool keeps Numba's default size; the idle threads cost nothing. The share
+    is passed instead in ``STICKSLIP_FAST_NUMBA_THREADS``, which only the
+    warm-up reads, so a sweep given this cluster's address (rather than the
+    cluster) still runs each task on its share.
 
     Parameters
     ----------
@@ -236,11 +247,12 @@ def local_cluster(n_workers: int | None = None, **kwargs: Any) -> Any:
     distributed.LocalCluster
     """
     distributed = _require_distributed()
-    n, _threads = _local_shape(n_workers)
+    n, threads = _local_shape(n_workers)
     options: dict[str, Any] = dict(
         n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0"
     )
     options.update(kwargs)
+    options["env"] = {THREADS_ENV: str(threads), **dict(options.get("env") or {})}
     return distributed.LocalCluster(**options)
 
 
@@ -251,7 +263,8 @@ def prepare_client(client: Any, numba_threads: int | None = None) -> dict[str, d
     ----------
     client : distributed.Client
     numba_threads : int, optional
-        Numba threads per task on every worker (default: each worker's
+        Numba threads per task on every worker (default: the share a
+        :func:`local_cluster` gave its workers, else each worker's
         ``NUMBA_NUM_THREADS``, or all its cores). Ignored when the plugin is
         already registered on this cluster.
 
