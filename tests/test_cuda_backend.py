@@ -315,3 +315,22 @@ def test_kernels_compile_for_the_real_cuda_target():
         pytest.skip("no NVVM here (install the [cuda] extra): " + res.stdout.strip())
     assert res.returncode == 0, res.stdout + res.stderr[-3000:]
     assert "ENTRY True" in res.stdout, res.stdout
+
+
+def test_basins_on_the_gpu_match_cpu():
+    # 2 x 2 starts of tests/test_basins.py's plane at eta = 3.2, three of them in the
+    # period-1 orbit's basin and one in steady sliding's: the basins run on the
+    # census's device path, so labels and attractors agree
+    kw = dict(t_end=3000.0, progress=False)
+    grid = (np.linspace(-0.3, 0.3, 8)[:2], np.linspace(-0.25, 0.3, 9)[1:3])
+    s = ASYM.replace(eta=3.2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        gpu = ssf.basins(s, grid, backend="cuda", **kw)
+        cpu = ssf.basins(s, grid, backend="local", **kw)
+    np.testing.assert_array_equal(gpu.labels, cpu.labels)
+    assert [(a.kind, a.period, a.count) for a in gpu.attractors] == [
+        (a.kind, a.period, a.count) for a in cpu.attractors
+    ]
+    assert gpu.fractions() == cpu.fractions()
+    assert {a.kind for a in cpu.attractors} == {"orbit", "equilibrium"}
