@@ -34,7 +34,7 @@ from ..core.trajectory import (
     N_STAT_F,
     N_STAT_I,
     integrate,
-    kernel_variant,
+    method_variant,
     run_settings,
     unroll_ring,
 )
@@ -202,9 +202,11 @@ def _run_kernel(
         s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
         s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
     )  # fmt: skip
+    method = METHODS.index(s.method)
+    n_osc, dc = system.n_oscillators, system.is_dc_motor
     return call_interruptible(
-        integrate, METHODS.index(s.method), y_init, system.to_array(), system.n_oscillators,
-        system.is_dc_motor, kernel_variant(system.n_oscillators, system.is_dc_motor), rs, b.ring,
+        integrate, method, y_init, system.to_array(), n_osc, dc,
+        method_variant(method, n_osc, dc), rs, b.ring,
         b.tring, b.samples, 1.0 if sample_dt is None else sample_dt,
         b.y_end, b.stat_i, b.stat_f, abort=new_abort_flag(),
     )  # fmt: skip

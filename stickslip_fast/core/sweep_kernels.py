@@ -15,22 +15,18 @@ from .poincare import detect_period
 from .problems import (
     alloc_bordered_linear,
 )
-from .steppers import (
-    DOPRI5_METHOD,
-    alloc_workspace,
-)
+from .steppers import alloc_workspace
 from .trajectory import (
     _JIT,
     _PJIT,
-    M_DOPRI5,
-    M_DOPRI5_FIXED,
     NO_ABORT,
     RunSettings,
     _all_finite,
     _make_observer,
-    _rosenbrock,
     _run,
     _stop_rule,
+    method_matches,
+    method_record,
     unroll_ring,
 )
 
@@ -94,17 +90,19 @@ def _usable_start(status: int) -> bool:
     return 0 <= status <= 3 or status == ST_UNSETTLED
 
 
-@njit(**_JIT)
+# inlined (Numba IR): a call boundary here compiled the whole driver once more
+@njit(inline="always", **_JIT)
 def _lane_dispatch(
     method, first, stride, count, y0s, chain, params, n_osc, dc, variant, rs, max_points, points,
     t_points, ints, t_conv, final_state, abort,
 ):  # fmt: skip
-    head = (first, stride, count, y0s, chain, params, n_osc, dc)
-    tail = (rs, max_points, points, t_points, ints, t_conv, final_state, abort)
-    if method == M_DOPRI5 or method == M_DOPRI5_FIXED:
-        _lane_values(DOPRI5_METHOD, *head, (), *tail)  # as in integrate()
-    else:
-        _lane_values(_rosenbrock(method), *head, variant, *tail)
+    # as in integrate(): the variant's type is the method family; a method of the
+    # other family runs on NaN parameters, so every value gets ST_ERROR
+    p_run = params if method_matches(method, variant) else np.full_like(params, np.nan)
+    _lane_values(
+        method_record(method, variant), first, stride, count, y0s, chain, p_run, n_osc, dc,
+        variant, rs, max_points, points, t_points, ints, t_conv, final_state, abort,
+    )  # fmt: skip
 
 
 @njit(**_JIT)
@@ -152,7 +150,7 @@ def sweep_chunk(
     params: np.ndarray,
     n_osc: int,
     dc: bool,
-    variant: tuple,
+    variant: tuple | None,
     rs: RunSettings,
     max_points: int,
     lanes: int,

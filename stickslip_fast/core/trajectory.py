@@ -14,10 +14,13 @@ allocated once per thread lane outside the step loop, and every output slot of
 a value starts as ``ST_NOT_COMPUTED`` so that a value that was never computed
 can never pass for a result.
 
-Every entry point takes ``variant`` (:func:`kernel_variant`): for one disk the
-Rosenbrock runs integrate :class:`~stickslip_fast.problems.StickSlipSmall`, the
-model with its sizes known at compile time; Numba compiles a variant only when a
-process first uses it.
+Every entry point takes ``variant`` (:func:`method_variant`): ``None`` for the
+explicit methods, else :func:`kernel_variant` (for one disk the Rosenbrock runs
+integrate :class:`~stickslip_fast.problems.StickSlipSmall`, the model with its
+sizes known at compile time). Its type picks the method family at compile time,
+so Numba compiles only the family and the variant a process uses: a first
+``simulate`` with Rodas5P no longer compiles the Dormand-Prince driver as well
+(see docs/performance.md, "The first run").
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 from numba.extending import overload
 
 from ..base.jit import JIT, OVERLOAD, is_record
@@ -174,40 +177,74 @@ def kernel_variant(n_osc: int, dc: bool) -> tuple:
     return ()
 
 
-def drive_model(method, prob, variant, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat):  # noqa: ARG001
-    """:func:`driver.drive` on the model record ``prob`` (a :class:`StickSlip`).
+def method_variant(method: int, n_osc: int, dc: bool) -> tuple | None:
+    """The ``variant`` argument of the kernels for a method index (:data:`METHODS`).
+
+    ``None`` for the explicit methods (dopri5, dopri5-fixed: their steps take the
+    generic record), else :func:`kernel_variant`. Its type is the compile-time
+    choice of the method family: a kernel compiled for one family holds no code
+    of the other (the compiled drivers differ in every stage, so each family is a
+    separate compile of about half the cold start).
+    """
+    if method in (M_DOPRI5, M_DOPRI5_FIXED):
+        return None
+    return kernel_variant(n_osc, dc)
+
+
+def method_record(method, variant):  # noqa: ARG001 - resolved by overload
+    """In compiled code: the method record of ``method`` within ``variant``'s family."""
+
+
+@overload(method_record, **OVERLOAD)
+def _method_record(method, variant):
+    if isinstance(variant, types.NoneType):
+        return lambda method, variant: DOPRI5_METHOD
+    return lambda method, variant: _rosenbrock(method)
+
+
+def method_matches(method, variant):  # noqa: ARG001 - resolved by overload
+    """In compiled code: True if the method index belongs to ``variant``'s family."""
+
+
+@overload(method_matches, **OVERLOAD)
+def _method_matches(method, variant):
+    if isinstance(variant, types.NoneType):
+        return lambda method, variant: method == M_DOPRI5 or method == M_DOPRI5_FIXED
+    return lambda method, variant: (
+        method == M_RODAS5P or method == M_RODAS4P or method == M_RODAS4P2
+    )
+
+
+def model_problem(method, prob, variant):  # noqa: ARG001 - resolved by overload
+    """In compiled code: the record :func:`driver.drive` integrates for the model record ``prob``.
 
     With a Rosenbrock method and a non-empty ``variant`` (see
-    :func:`kernel_variant`) it drives the :class:`StickSlipSmall` twin instead:
-    the same arithmetic with the sizes known at compile time (bit-identical
-    results, 1.6-2.5x faster per step; see docs/developing.md). Explicit methods take the
-    generic record (their steps have no linear algebra to gain on).
+    :func:`kernel_variant`) the :class:`StickSlipSmall` twin of ``prob`` (a
+    :class:`StickSlip`): the same arithmetic with the sizes known at compile time
+    (bit-identical results, 1.6-2.5x faster per step; see docs/developing.md).
+    Otherwise ``prob`` itself: explicit methods take the generic record (their steps
+    have no linear algebra to gain on). Only the record is chosen here, and
+    :func:`_run` calls ``drive`` itself: an overload that called ``drive`` was
+    compiled whole once more, just to be typed (Numba compiles an inlined overload's
+    implementation before inlining it), about 5 % of a cold start.
     """
 
 
-@overload(drive_model, **OVERLOAD)
-def _drive_model(method, prob, variant, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat):
-    if is_record(method, RosenbrockMethod) and len(variant) > 0:
-
-        def impl(method, prob, variant, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat):
-            small = make_small(prob, variant)
-            return drive(method, small, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat)
-
-        return impl
-
-    def generic(method, prob, variant, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat):
-        return drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat)
-
-    return generic
+@overload(model_problem, **OVERLOAD)
+def _model_problem(method, prob, variant):
+    small = not isinstance(variant, types.NoneType) and len(variant) > 0
+    if is_record(method, RosenbrockMethod) and small:
+        return lambda method, prob, variant: make_small(prob, variant)
+    return lambda method, prob, variant: prob
 
 
 def variant_matches(variant, n_osc, dc):  # noqa: ARG001 - resolved by overload
-    """True if ``variant`` is () or the token of (n_osc, dc)."""
+    """True if ``variant`` is None, () or the token of (n_osc, dc)."""
 
 
 @overload(variant_matches, **OVERLOAD)
 def _variant_matches_impl(variant, n_osc, dc):
-    if len(variant) == 0:
+    if isinstance(variant, types.NoneType) or len(variant) == 0:
         return lambda variant, n_osc, dc: True
     v_osc, v_dc = shape_dims(variant)
     return lambda variant, n_osc, dc: n_osc == v_osc and dc == v_dc
@@ -239,9 +276,10 @@ def _run(
             obs.ymax[i] = math.nan
         return ST_ERROR
     ctl = Controls(rs.rtol, rs.atol, rs.h_fixed, rs.max_steps)
-    status = drive_model(
-        method, prob, variant, lin, ws, y, rs.t_end, ctl, obs, stop, abort, istat, fstat
-    )
+    status = drive(
+        method, model_problem(method, prob, variant), lin, ws, y, rs.t_end, ctl, obs, stop,
+        abort, istat, fstat,
+    )  # fmt: skip
     fstat[1] = stop.state[S_T_CONVERGED]
     if status == ST_OK:
         t_final = fstat[0]
@@ -271,7 +309,8 @@ def _make_observer(rs, pts, tpts, samples, sample_dt, n):
     )  # fmt: skip
 
 
-@njit(**_JIT)
+# inlined (Numba IR): a call boundary here compiled the whole driver once more
+@njit(inline="always", **_JIT)
 def _run_alone(method, y0, p, n_osc, dc, variant, rs, obs, stop, y, istat, fstat, abort) -> int:
     """:func:`_run` with buffers of its own."""
     n = y0.size
@@ -314,7 +353,9 @@ def integrate(
     """Integrate one trajectory from t = 0 to ``rs.t_end``; return its status code.
 
     ``p`` is the packed parameter array (eta' is recomputed from eta here);
-    ``rs`` the settings (:func:`run_settings`). Outputs: ``pts``/``tpts`` (ring
+    ``rs`` the settings (:func:`run_settings`); ``variant`` is
+    :func:`method_variant` of ``method`` (a method of the other family gives
+    ST_ERROR). Outputs: ``pts``/``tpts`` (ring
     buffer of the last Poincare points; see ``stat_i[I_CROSSINGS]`` for the
     total), ``samples`` (uniform grid from t_transient), ``y_end`` (state at the
     last accepted time), ``stat_i`` (steps, rejected, crossings, samples) and
@@ -328,12 +369,13 @@ def integrate(
     stop = _stop_rule(rs, n_osc, dc, n)
     istat = np.zeros(2, dtype=np.int64)
     fstat = np.zeros(2)
-    args = (rs, obs, stop, y_end, istat, fstat, abort)
-    if method == M_DOPRI5 or method == M_DOPRI5_FIXED:
-        # explicit steps gain nothing from the variant: one compiled kernel for all
-        status = _run_alone(DOPRI5_METHOD, y0, p, n_osc, dc, (), *args)
-    else:
-        status = _run_alone(_rosenbrock(method), y0, p, n_osc, dc, variant, *args)
+    # the family is the variant's type: one driver compiled, not both. A method of
+    # the other family runs on NaN parameters: _run's check returns ST_ERROR.
+    p_run = p if method_matches(method, variant) else np.full(p.size, np.nan)
+    status = _run_alone(
+        method_record(method, variant), y0, p_run, n_osc, dc, variant, rs, obs, stop, y_end,
+        istat, fstat, abort,
+    )  # fmt: skip
     stat_i[I_STEPS] = istat[0]
     stat_i[I_REJECTED] = istat[1]
     stat_i[I_CROSSINGS] = obs.counts[0]

@@ -1,0 +1,127 @@
+"""The first run on a fresh install: cold compiles, each in a fresh process on an empty cache.
+
+Two jobs, each in a fresh interpreter with ``NUMBA_CACHE_DIR`` set to an empty
+temporary folder (what a new install, a CI run or a new Dask worker pays), then
+once more on the cache it filled:
+
+- ``first_simulate``: import + the README's first ``ssf.simulate`` (asymmetric
+  eta = 9.99, t_end 3000, t_transient 2000).
+- ``readme_main_job``: the README's first command,
+  ``stickslip-fast sweep data/fig06_asymmetric_constant.toml -o out.h5`` (the Fig. 6
+  diagram, 1000 values, all cores), as ``python -m stickslip_fast.cli``.
+
+Each cold run is repeated (``--repeats``, default 3) and reported as the median,
+with the process's CPU time (user + system) beside the wall time: on a shared
+machine the wall time of a compile varies by +-30 %, its CPU time much less.
+``--root`` benchmarks another checkout (for a before/after comparison, run both
+in one invocation with ``--root A --root B``: they alternate, repeat by repeat).
+
+Usage: ``python -m benchmarks.first_run [--repeats 3] [--root DIR ...] [--out FILE]``.
+Timing only: no assertion here (tests/test_first_compile.py checks what is compiled).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+from .common import ROOT
+
+_SIMULATE = textwrap.dedent(
+    """
+    import stickslip_fast as ssf
+    res = ssf.simulate(ssf.System.preset("asymmetric", eta=9.99), 3000, 2000)
+    assert (res.status, res.period) == ("ok", 2), (res.status, res.period)
+    """
+)
+
+
+def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
+    """One fresh process: its wall time and CPU time (user + system of the child)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(root))
+    if job == "first_simulate":
+        cmd = [sys.executable, "-c", _SIMULATE]
+    else:
+        config = str(root / "data" / "fig06_asymmetric_constant.toml")
+        out = os.path.join(workdir, "fig06.h5")
+        if os.path.exists(out):
+            os.remove(out)  # the command would resume a finished file
+        cmd = [sys.executable, "-m", "stickslip_fast.cli", "sweep", config, "-o", out]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, cwd=workdir, capture_output=True, text=True, timeout=1800)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{job} failed in {root}:\n{proc.stderr[-3000:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return dict(wall_s=round(wall, 2), cpu_s=round(cpu, 2))
+
+
+def _summary(runs: list[dict]) -> dict:
+    return dict(
+        runs=runs,
+        median_wall_s=statistics.median(r["wall_s"] for r in runs),
+        median_cpu_s=statistics.median(r["cpu_s"] for r in runs),
+    )
+
+
+JOBS = ("first_simulate", "readme_main_job")
+
+
+def run(roots=(ROOT,), repeats: int = 3, log=print, jobs=JOBS) -> dict:
+    """Cold (empty cache) and cached runs of ``jobs`` for each checkout in ``roots``."""
+    roots = [Path(r).resolve() for r in roots]
+    cold = {(str(r), j): [] for r in roots for j in jobs}
+    cached = {}
+    with tempfile.TemporaryDirectory(prefix="ssf_first_run_") as work:
+        for k in range(repeats):
+            for root in roots:
+                for job in jobs:
+                    cache = tempfile.mkdtemp(prefix="cache_", dir=work)
+                    rec = _child(root, cache, job, work)
+                    cold[(str(root), job)].append(rec)
+                    log(f"  {root.name} {job} cold #{k + 1}: {rec['wall_s']:.1f} s wall, "
+                        f"{rec['cpu_s']:.1f} s CPU")  # fmt: skip
+                    if k == 0:  # the same job again on the cache it filled
+                        cached[(str(root), job)] = again = _child(root, cache, job, work)
+                        log(f"  {root.name} {job} cached: {again['wall_s']:.1f} s wall")
+    out = {}
+    for root in roots:
+        out[str(root)] = {
+            job: dict(cold=_summary(cold[(str(root), job)]), cached=cached[(str(root), job)])
+            for job in jobs
+        }
+    return dict(
+        repeats=repeats,
+        jobs=list(jobs),
+        load_average=os.getloadavg(),
+        targets=dict(first_simulate_cold_s=10.0, readme_main_job_cold_s=25.0),
+        results=out,
+    )
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--root", action="append", help="checkout to benchmark (repeatable)")
+    ap.add_argument("--jobs", nargs="*", choices=JOBS, default=list(JOBS))
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "first_run.json"))
+    args = ap.parse_args(argv)
+    res = run(args.root or [ROOT], args.repeats, jobs=args.jobs)
+    Path(args.out).write_text(json.dumps(res, indent=1))
+    print(json.dumps({r: {j: v["cold"]["median_wall_s"] for j, v in d.items()}
+                      for r, d in res["results"].items()}, indent=1))  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,87 @@
+"""A first run compiles only what it needs (issue 30): counted, not timed.
+
+A fresh process with an empty ``NUMBA_CACHE_DIR`` runs one ``simulate`` and
+records every compilation (Numba's ``numba:compile`` events, overload
+implementations included). Before the method family became a compile-time
+choice, a first Rodas5P ``simulate`` compiled the Dormand-Prince driver as well
+(two ``drive`` specialisations, about 40 % of the cold start); a first
+Dormand-Prince run compiled all of the Rosenbrock machinery. The explicit family is
+the cheaper compile, so that is the run checked here; timings live in
+benchmarks/first_run.py.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import stickslip_fast
+
+ROOT = Path(stickslip_fast.__file__).resolve().parents[1]
+
+SNIPPET = """
+import json
+import numpy as np
+from numba.core import event
+
+compiled = []
+
+
+class Listener(event.Listener):
+    def on_start(self, ev):
+        pass
+
+    def on_end(self, ev):
+        d = ev.data["dispatcher"]
+        compiled.append([d.py_func.__module__, d.py_func.__qualname__, str(ev.data["args"])])
+
+
+event.register("numba:compile", Listener())
+import stickslip_fast as ssf
+from stickslip_fast.core import driver, trajectory
+
+res = ssf.simulate(ssf.System.preset("asymmetric", eta=9.99), 20.0, method="dopri5")
+# a method index of the other family than the variant says: an error, and no compile
+m = trajectory.M_RODAS5P
+out = trajectory.integrate(
+    m, np.zeros(4), ssf.System.preset("asymmetric").to_array(), 1, False, None,
+    trajectory.run_settings(1.0, 0.0, 1e-6, 1e-8), np.empty((4, 4)), np.empty(4),
+    np.empty((0, 4)), 1.0, np.empty(4), np.zeros(4, dtype=np.int64), np.zeros(4),
+    np.zeros(1, dtype=np.int64),
+)
+print(json.dumps(dict(
+    status=res.status, n_steps=res.n_steps, mismatch=int(out), compiled=compiled,
+    integrate=len(trajectory.integrate.signatures), drive=len(driver.drive.signatures),
+)))
+"""
+
+
+def _first_run(tmp_path):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT))
+    out = subprocess.run(
+        [sys.executable, "-c", SNIPPET], env=env, capture_output=True, text=True,
+        timeout=900, check=True, cwd=tmp_path,
+    ).stdout  # fmt: skip
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def test_first_simulate_compiles_one_method_family(tmp_path):
+    from stickslip_fast.base.status import ST_ERROR
+
+    rec = _first_run(tmp_path)
+    # 20 time units: less than one oscillation, so no crossing of the section yet
+    assert rec["status"] == "no-crossings" and rec["n_steps"] > 0
+    compiled = rec["compiled"]
+    assert compiled, "nothing compiled: the cache folder was not empty"
+    # one specialisation of the trajectory kernel and of the driver: the explicit family
+    assert rec["integrate"] == 1
+    assert rec["drive"] == 1
+    drives = [args for mod, name, args in compiled if name == "drive"]
+    assert len(drives) == 1 and drives[0].startswith("(ExplicitRKMethod(")
+    # none of the Rosenbrock machinery (stages, Jacobian, factorisation) was compiled
+    rosenbrock = [(name, args[:80]) for _, name, args in compiled if "RosenbrockMethod" in args]
+    assert rosenbrock == []
+    assert not any(name.startswith(("_small_", "jacobian_blocks")) for _, name, _ in compiled)
+    # the method index must belong to the variant's family, else an error, never a run
+    assert rec["mismatch"] == ST_ERROR
