@@ -227,6 +227,11 @@ def _check_census_args(
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if isinstance(param, (tuple, list)) and len(param) == 2:
+        if not isinstance(values, (tuple, list)) or len(values) != 2 or 0 in map(np.ndim, values):
+            raise ValueError(
+                f"values of a census over two params must be a pair of arrays, one per param "
+                f"({', '.join(map(repr, param))}), got {plain(values)}"
+            )
         names, axes = _normalise_params(system, param, values)  # as a 2-D sweep
     else:
         names, axes = (param,), (_check_values(system, param, values),)
