@@ -1,6 +1,6 @@
 """Cost of a census over a plane (issue 28): cells per second on the CPU, and on a GPU.
 
-The plane is that of data/census/census_plane_eta_k12.toml: asymmetric set,
+The plane is that of data/maps/census_plane_eta_k12.toml: asymmetric set,
 constant belt, eta in [1, 6] x k12 in [-0.95, -0.55], 16 starts per cell
 (the zero state and 15 seeded starts in the default box), converged stopping
 with the cap t_end = 3000. A 2 x 2 plane first compiles the kernels (not timed).

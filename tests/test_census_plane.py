@@ -6,18 +6,22 @@ results across threads, chunk sizes and a resumed file, and bad input.
 
 from __future__ import annotations
 
+import os
+import textwrap
+
 import h5py
 import numpy as np
 import pytest
-from test_census import RAW, _raw, _set_orbit, _set_rest
+from test_census import RAW, _raw, _set_orbit, _set_rest, kill_after
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis.census import census, default_box, load_census, sample_starts
 from stickslip_fast.analysis.census_classify import classify_census
 from stickslip_fast.analysis.census_plane import classify_plane
-from stickslip_fast.cli.config import ConfigError, parse_config
+from stickslip_fast.cli.config import ConfigError, load_config, parse_config
 from stickslip_fast.io import ConfigMismatchError
 
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ASYM = ssf.System.preset("asymmetric")
 PARAMS = ("eta", "k12")
 # the issue's anchors: at (3.5, -0.7) the period-1 orbit and steady sliding share the
@@ -157,7 +161,38 @@ def test_bad_input_names_the_field():
         census(ASYM, PARAMS, ([2.0], [-0.8]), starts=np.zeros((3, 5)), **kw)
     cfg = parse_config({"census": {"param": ["eta", "k12"], "values": [[1.0, 2.0], [-0.8]]}})
     assert cfg.census["param"] == PARAMS and len(cfg.census["values"][0]) == 2
+    cfg = load_config(os.path.join(ROOT, "data", "maps", "census_plane_eta_k12.toml"))
+    v1, v2 = cfg.census["values"]
+    assert cfg.census["param"] == PARAMS and (v1.size, v2.size) == (41, 33)
+    assert 3.5 in v1 and np.min(np.abs(v2 + 0.7)) < 1e-15 and np.min(np.abs(v2 + 0.8)) < 1e-15
+    assert os.path.exists(os.path.join(ROOT, "docs", "figures", "census_plane_eta_k12.png"))
     with pytest.raises(ConfigError, match=r"\[census\].values must be a list of two"):
         parse_config({"census": {"param": ["eta", "k12"], "values": [1.0, 2.0, 3.0]}})
     with pytest.raises(ConfigError, match=r"\[census\].param"):
         parse_config({"census": {"param": ["eta", "k12", "mu"], "values": [[1.0], [2.0]]}})
+
+
+def test_a_killed_plane_census_resumes_to_the_same_file(tmp_path):
+    axes = (np.linspace(5.0, 8.0, 4), np.array([-0.8, -0.7]))
+    kw = dict(n_starts=4, t_end=3000.0, t_transient=2000.0, max_points=16, progress=False)
+    full, part = tmp_path / "full.h5", tmp_path / "part.h5"
+    census(ASYM, PARAMS, axes, out=full, chunk_size=2, threads=1, **kw)
+    script = textwrap.dedent(
+        f"""
+        import sys, numpy as np
+        sys.path.insert(0, {ROOT!r})
+        import stickslip_fast as ssf
+        ssf.census(ssf.System.preset("asymmetric"), ("eta", "k12"),
+                   (np.linspace(5.0, 8.0, 4), np.array([-0.8, -0.7])),
+                   out={str(part)!r}, chunk_size=2, threads=1, **{kw!r})
+        """
+    )
+    n_done = kill_after(script, part, 8)
+    assert 0 < n_done < 32, "the census was not killed mid-run"
+    census(ASYM, PARAMS, axes, out=part, chunk_size=5, threads=2, **kw)
+    with h5py.File(full, "r") as a, h5py.File(part, "r") as b:
+        for name in ("label", *RAW):
+            np.testing.assert_array_equal(a[name][...], b[name][...], err_msg=name)
+        for name in ("track", "value_index", "value_index2", "fraction", "points"):
+            np.testing.assert_array_equal(a["attractors"][name][...], b["attractors"][name][...])
+        assert a.attrs["config"] == b.attrs["config"]

@@ -228,7 +228,8 @@ def write_census_classification(
     if labels.ndim == 3:
         cells = [((i, j), atts) for i, row in enumerate(attractors) for j, atts in enumerate(row)]
     rows = [a for _, atts in cells for a in atts]
-    cidx = np.array([c for c, atts in cells for _ in atts], dtype="i4").reshape(len(rows), labels.ndim - 1)
+    cidx = np.array([c for c, atts in cells for _ in atts], dtype="i4")
+    cidx = cidx.reshape(len(rows), labels.ndim - 1)
     with h5py.File(path, "r+", libver="latest") as h5:
         h5.attrs["classified"] = 0
         h5.flush()
