@@ -51,6 +51,79 @@ from .census_plane import CensusPlaneResult, classify_plane, plane_track_columns
 from .census_run import RunOptions, _values_digest, run_pairs
 from .census_starts import _check_starts, default_box, sample_starts  # noqa: F401
 
+#: :func:`census`'s docstring (kept out of the function body: the parameters take more
+#: lines than the code, and the layout rule counts a function's lines).
+_CENSUS_DOC = """Every attractor at every value of ``param``, with its basin fraction.
+
+Runs every start at every value (in parallel over the (value, start)
+pairs), groups the runs of each value into attractors, and matches the
+attractors of neighbouring values into tracks. With two parameters the
+values are a grid (a plane): every start runs at every cell, and tracks
+join the attractors of neighbouring cells (:func:`classify_plane`).
+
+Parameters
+----------
+system : System
+    Base parameters; ``param`` is overwritten per value.
+param : str or (str, str)
+    The swept field (``"eta"``, ``"k12"``, ...), or two fields for a census
+    over the plane they span.
+values : array_like, or (array_like, array_like)
+    Its values, in the order tracks follow (sorted is what you want); for
+    two fields one array each: cell (i, j) is (``values[0][i]``,
+    ``values[1][j]``).
+t_end, t_transient : float
+    Each run lasts ``t_end``; points are kept after ``t_transient``.
+n_starts : int
+    Number of starts, the zero state included when ``include_zero``.
+box : array_like (n_state, 2), optional
+    (low, high) per state variable for the seeded uniform sampler; default
+    :func:`default_box` (docs/census.md gives the physical reasoning).
+starts : array_like (n_starts, n_state), optional
+    Explicit starts instead of the sampler (not together with ``box``).
+seed : int
+    Seed of the sampler.
+include_zero : bool
+    Make start 0 the zero state (the paper's initial condition).
+stop : {"converged", "fixed"}
+    Stop rule of every run, as for :func:`simulate`: "converged" (the
+    default) ends a run once its Poincare points repeat or it has come to
+    rest (``t_end`` is the cap), records only points after that, and
+    stores each run's ``t_converged``; "fixed" integrates to ``t_end``.
+    Converged stopping is the default because the census groups runs by
+    their points: with "fixed" and ``t_transient = 0`` a run's points
+    include its transient, and each run costs the full ``t_end``.
+out : path, optional
+    HDF5 file to stream into (docs/file-format.md, census file); running
+    the same census on it again resumes, a different one is refused.
+threads, chunk_size, backend, scheduler, n_workers, progress
+    As for :func:`sweep`; ``chunk_size`` counts (value, start) pairs per
+    unit of work (default 32 per thread; 64 with ``backend="dask"``, each
+    unit split over the workers; with ``backend="cuda"`` one launch of
+    about the threads the GPU holds, docs/gpu.md). Results do not depend
+    on them, except that GPU points differ from the CPU's at ~1e-9, so a
+    file is all-CPU or all-GPU (the backend is part of its configuration).
+method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol, dwell
+    As for :func:`sweep`; ``max_points`` defaults to 128 (enough to
+    detect any period <= 64).
+identity_tol, track_threshold : float
+    See :func:`classify_census`; they do not change the runs, so a finished
+    file can be re-classified with other values (:func:`load_census`).
+title, notes : str
+    Stored in the file.
+
+Returns
+-------
+CensusResult, or CensusPlaneResult for two parameters
+    ``attractors[i]`` and ``labels[i, :]`` per value; for a plane
+    ``attractors[i][j]`` and ``labels[i, j, :]`` per cell.
+
+Raises
+------
+ValueError
+    For bad input, naming the argument.
+"""
+
 
 def census(
     system: System,
@@ -88,76 +161,6 @@ def census(
     _config_extra: dict | None = None,
     _desc: str | None = None,
 ) -> CensusResult | CensusPlaneResult:
-    """Every attractor at every value of ``param``, with its basin fraction.
-
-    Runs every start at every value (in parallel over the (value, start)
-    pairs), groups the runs of each value into attractors, and matches the
-    attractors of neighbouring values into tracks. With two parameters the
-    values are a grid (a plane): every start runs at every cell, and tracks
-    join the attractors of neighbouring cells (:func:`classify_plane`).
-
-    Parameters
-    ----------
-    system : System
-        Base parameters; ``param`` is overwritten per value.
-    param : str or (str, str)
-        The swept field (``"eta"``, ``"k12"``, ...), or two fields for a census
-        over the plane they span.
-    values : array_like, or (array_like, array_like)
-        Its values, in the order tracks follow (sorted is what you want); for
-        two fields one array each: cell (i, j) is (``values[0][i]``,
-        ``values[1][j]``).
-    t_end, t_transient : float
-        Each run lasts ``t_end``; points are kept after ``t_transient``.
-    n_starts : int
-        Number of starts, the zero state included when ``include_zero``.
-    box : array_like (n_state, 2), optional
-        (low, high) per state variable for the seeded uniform sampler; default
-        :func:`default_box` (docs/census.md gives the physical reasoning).
-    starts : array_like (n_starts, n_state), optional
-        Explicit starts instead of the sampler (not together with ``box``).
-    seed : int
-        Seed of the sampler.
-    include_zero : bool
-        Make start 0 the zero state (the paper's initial condition).
-    stop : {"converged", "fixed"}
-        Stop rule of every run, as for :func:`simulate`: "converged" (the
-        default) ends a run once its Poincare points repeat or it has come to
-        rest (``t_end`` is the cap), records only points after that, and
-        stores each run's ``t_converged``; "fixed" integrates to ``t_end``.
-        Converged stopping is the default because the census groups runs by
-        their points: with "fixed" and ``t_transient = 0`` a run's points
-        include its transient, and each run costs the full ``t_end``.
-    out : path, optional
-        HDF5 file to stream into (docs/file-format.md, census file); running
-        the same census on it again resumes, a different one is refused.
-    threads, chunk_size, backend, scheduler, n_workers, progress
-        As for :func:`sweep`; ``chunk_size`` counts (value, start) pairs per
-        unit of work (default 32 per thread; 64 with ``backend="dask"``, each
-        unit split over the workers; with ``backend="cuda"`` one launch of
-        about the threads the GPU holds, docs/gpu.md). Results do not depend
-        on them, except that GPU points differ from the CPU's at ~1e-9, so a
-        file is all-CPU or all-GPU (the backend is part of its configuration).
-    method, rtol, atol, h, max_points, max_steps, equilibrium_tol, period_tol, dwell
-        As for :func:`sweep`; ``max_points`` defaults to 128 (enough to
-        detect any period <= 64).
-    identity_tol, track_threshold : float
-        See :func:`classify_census`; they do not change the runs, so a finished
-        file can be re-classified with other values (:func:`load_census`).
-    title, notes : str
-        Stored in the file.
-
-    Returns
-    -------
-    CensusResult, or CensusPlaneResult for two parameters
-        ``attractors[i]`` and ``labels[i, :]`` per value; for a plane
-        ``attractors[i][j]`` and ``labels[i, j, :]`` per cell.
-
-    Raises
-    ------
-    ValueError
-        For bad input, naming the argument.
-    """
     names, axes = _check_census_args(
         system, param, values, stop, backend, scheduler, n_workers, track_threshold, identity_tol
     )
@@ -192,6 +195,9 @@ def census(
     return _classified(
         system, names, axes, start_arr, mem, settings.to_dict(), identity_tol, track_threshold
     )
+
+
+census.__doc__ = _CENSUS_DOC
 
 
 def _classified(
