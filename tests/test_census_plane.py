@@ -7,6 +7,7 @@ results across threads, chunk sizes and a resumed file, and bad input.
 from __future__ import annotations
 
 import os
+import sys
 import textwrap
 
 import h5py
@@ -196,3 +197,30 @@ def test_a_killed_plane_census_resumes_to_the_same_file(tmp_path):
         for name in ("track", "value_index", "value_index2", "fraction", "points"):
             np.testing.assert_array_equal(a["attractors"][name][...], b["attractors"][name][...])
         assert a.attrs["config"] == b.attrs["config"]
+
+
+def test_the_command_line_the_summary_and_the_maps_script(plane, tmp_path, capsys):
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "p.toml"
+    starts = ", ".join("[" + ", ".join(repr(float(x)) for x in row) + "]" for row in STARTS)
+    cfg.write_text(
+        "[system]\npreset = 'asymmetric'\n[integration]\nt_end = 3000.0\nt_transient = 2000.0\n"
+        "[census]\nparam = ['eta', 'k12']\nvalues = [[2.0, 3.5], [-0.8, -0.7]]\n"
+        f"starts = [{starts}]\n"
+    )
+    out = tmp_path / "p.h5"
+    assert main(["census", str(cfg), "-o", str(out), "--quiet"]) == 0
+    np.testing.assert_array_equal(load_census(out).labels, plane.labels)
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    n_mixed = int(np.sum((plane.sliding_fraction() > 0) & (plane.sliding_fraction() < 1)))
+    assert "eta in [2, 3.5] (2) x k12 in [-0.8, -0.7] (2) cells x 8 starts" in text
+    assert f"{n_mixed} depending on the start" in text and "orbit P1" in text
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import plot_census_plane
+
+    png = tmp_path / "p.png"
+    assert plot_census_plane.main([str(out), "-o", str(png)]) == 0
+    assert png.stat().st_size > 10_000
