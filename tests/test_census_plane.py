@@ -13,7 +13,7 @@ import textwrap
 import h5py
 import numpy as np
 import pytest
-from test_census import RAW, _raw, _set_orbit, _set_rest, kill_after
+from test_census import HAVE_DASK, RAW, _raw, _set_orbit, _set_rest, kill_after
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis.census import census, default_box, load_census, sample_starts
@@ -144,6 +144,17 @@ def test_identical_across_threads_chunks_and_a_resumed_file(tmp_path):
         assert h5["tracks/n_cells"][...].tolist() == [t.n_cells for t in ref.tracks]
     with pytest.raises(ConfigMismatchError, match="values_sha256"):
         census(ASYM, PARAMS, (axes[0], axes[1][:2]), out=tmp_path / "a.h5", **kw)
+
+
+@pytest.mark.skipif(not HAVE_DASK, reason="dask[distributed] is not installed")
+def test_dask_backend_is_bit_identical():
+    axes = (np.array([2.0, 7.0]), np.array([-0.8, -0.7]))
+    kw = dict(n_starts=3, t_end=300.0, t_transient=150.0, max_points=32, progress=False)
+    ref = census(ASYM, PARAMS, axes, **kw)
+    res = census(ASYM, PARAMS, axes, backend="dask", n_workers=2, chunk_size=5, **kw)
+    for name in RAW:
+        np.testing.assert_array_equal(res.raw[name], ref.raw[name], err_msg=name)
+    np.testing.assert_array_equal(res.labels, ref.labels)
 
 
 def test_bad_input_names_the_field():
