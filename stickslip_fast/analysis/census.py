@@ -9,9 +9,12 @@ a long period or a transient longer than the run). The attractors of
 neighbouring values are then matched into *tracks* (as Attractors.jl's global
 continuation does), so one attractor keeps one id along the sweep and the
 births and deaths of tracks tell bifurcations apart from the zero-state start
-merely crossing a basin boundary.
+merely crossing a basin boundary. With two parameters the census covers a
+grid (a plane) instead: the same runs and grouping per cell, tracks over
+neighbouring cells and per-cell maps (:mod:`.census_plane`).
 
-The raw runs (the expensive part) stream to HDF5 and resume after a kill; the
+The starts are drawn by :mod:`.census_starts`; the runs are cut into units and
+streamed by :mod:`.census_run`. The raw runs (the expensive part) stream to HDF5 and resume after a kill; the
 grouping and tracking (cheap, deterministic) are recomputed from the raw runs
 and stored in the same file (schema in :mod:`stickslip_fast.io`, census
 section, and docs/file-format.md).
