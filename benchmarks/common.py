@@ -107,3 +107,20 @@ def best_time(fn, max_repeats: int = 3, budget: float = 1.0):
 
 run_sweep = ssf.sweep
 SWEEP_IMPL = "stickslip_fast.analysis.sweep"
+
+
+def add_device_options(parser, t_end: float = 3000.0) -> None:
+    """The options of the standalone map benchmarks: backend, threads, t_end, --no-save."""
+    parser.add_argument("--backend", choices=("local", "cuda"), default="local")
+    parser.add_argument("--threads", type=int, default=None)
+    parser.add_argument("--t-end", type=float, default=t_end)
+    parser.add_argument("--no-save", action="store_true", help="do not append to results/")
+
+
+def append_result(name: str, record: dict, no_save: bool = False) -> None:
+    """Append one JSON line to ``benchmarks/results/<name>.json`` (unless ``no_save``)."""
+    import json
+
+    if not no_save:
+        with open(ROOT / "benchmarks" / "results" / f"{name}.json", "a") as fh:
+            fh.write(json.dumps(record) + "\n")

@@ -20,6 +20,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
 from .analysis.basins import BasinsResult, basins, load_basins
 from .analysis.census import CensusResult, census, load_census
+from .analysis.census_plane import CensusPlaneResult
 from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .analysis.sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
 from .base.version import package_version
@@ -47,6 +48,7 @@ __all__ = [
     "load_sweep",
     "census",
     "CensusResult",
+    "CensusPlaneResult",
     "load_census",
     "basins",
     "BasinsResult",

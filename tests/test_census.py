@@ -233,22 +233,7 @@ def test_killed_census_resumes_to_the_same_file(tmp_path):
                    out={str(part)!r}, chunk_size=2, threads=1, progress=False, **{kw!r})
         """
     )
-    proc = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.DEVNULL)
-    n_done = 0
-    deadline = time.time() + 120
-    while time.time() < deadline and proc.poll() is None:
-        time.sleep(0.05)
-        try:
-            with h5py.File(part, "r", libver="latest", swmr=True) as h5:
-                n_done = int(h5["done"][...].sum())
-        except (OSError, KeyError):
-            continue
-        if n_done >= 6:
-            break
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    with h5py.File(part, "r", libver="latest", swmr=True) as h5:
-        n_done = int(h5["done"][...].sum())
+    n_done = kill_after(script, part, 6)
     assert 0 < n_done < 32, "the census was not killed mid-run"
     census(ASYM, "eta", vals, out=part, chunk_size=5, threads=2, progress=False, **kw)
     with h5py.File(full, "r") as a, h5py.File(part, "r") as b:
@@ -259,6 +244,27 @@ def test_killed_census_resumes_to_the_same_file(tmp_path):
         assert a.attrs["config"] == b.attrs["config"]
     with pytest.raises(ConfigMismatchError, match="n_starts"):
         census(ASYM, "eta", vals, out=part, progress=False, **{**kw, "n_starts": 5})
+
+
+def kill_after(script: str, path, n_runs: int) -> int:
+    """Run ``script`` in a subprocess, SIGKILL it once ``path`` has ``n_runs`` runs done.
+
+    Returns the runs done in the file after the kill.
+    """
+    proc = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+        try:
+            with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+                if int(h5["done"][...].sum()) >= n_runs:
+                    break
+        except (OSError, KeyError):
+            continue
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        return int(h5["done"][...].sum())
 
 
 @pytest.mark.skipif(not HAVE_DASK, reason="dask[distributed] is not installed")

@@ -15,7 +15,7 @@ from ..core.poincare import MAX_PERIOD, STATUS_NAMES
 from ..core.settings import STOP_KINDS
 from ..model.system import System
 
-__all__ = ["Attractor", "Track", "CensusResult", "classify_census", "KINDS"]
+__all__ = ["Attractor", "Track", "CensusResult", "classify_census", "group_census", "KINDS"]
 
 #: Attractor kinds, in the order of their integer codes in the file.
 KINDS = ("orbit", "equilibrium", "stalled", "unresolved")
@@ -236,6 +236,26 @@ def classify_census(
     attractors : list of list of Attractor
     tracks : list of Track
     """
+    groups_all, scale = group_census(raw, period_tol, identity_tol, track_threshold)
+    n_v, n_s = raw["status"].shape
+    # 2. tracks: greedy closest matching between neighbouring values
+    track_of, tracks_info = _match_tracks(groups_all, scale, track_threshold)
+    return _assemble(groups_all, track_of, tracks_info, n_v, n_s)
+
+
+def group_census(
+    raw: dict[str, np.ndarray],
+    period_tol: float,
+    identity_tol: float | None,
+    track_threshold: float,
+) -> tuple[list[list[list]], np.ndarray]:
+    """The runs of every value (or cell) grouped into attractors, and the tracking scale.
+
+    Step 1 of :func:`classify_census` (the same arguments); a census over a
+    plane groups its cells (C order) the same way. Returns, per value, its
+    groups ``[kind, period, canonical points, member starts]`` (most starts
+    first), and the per-variable spread that scales tracking distances.
+    """
     if identity_tol is None:
         identity_tol = IDENTITY_FACTOR * period_tol
     points = raw["points"]
@@ -243,20 +263,15 @@ def classify_census(
     period = raw["period"]
     status = raw["status"]
     final = raw["final_state"]
-    n_v, n_s = status.shape
-    n_state = final.shape[-1]
-
-    # 1. per value: group runs (in start order; each joins the first equal group)
+    # per value: group runs (in start order; each joins the first equal group)
     groups_all = [  # per value: list of [kind, period, canonical points, members]
         _group_runs(points[i], count[i], period[i], status[i], final[i], identity_tol)
-        for i in range(n_v)
+        for i in range(status.shape[0])
     ]
-    scale = _census_scale(groups_all, identity_tol, n_state)
+    scale = _census_scale(groups_all, identity_tol, final.shape[-1])
     for groups in groups_all:
         _merge_unresolved(groups, scale, track_threshold)
-    # 2. tracks: greedy closest matching between neighbouring values
-    track_of, tracks_info = _match_tracks(groups_all, scale, track_threshold)
-    return _assemble(groups_all, track_of, tracks_info, n_v, n_s)
+    return groups_all, scale
 
 
 def _group_runs(points, count, period, status, final, identity_tol) -> list[list]:

@@ -36,8 +36,8 @@ Layout (every section optional except what the command needs)::
     analyses = ["sync"]                            # extra per-value results (io.ANALYSES)
 
     [census]              # stickslip-fast census: every start at every value
-    param = "eta"
-    values = { start = 1.0, stop = 10.0, num = 200 }
+    param = "eta"                                  # or ["eta", "k12"]: a census over the plane
+    values = { start = 1.0, stop = 10.0, num = 200 }   # two parameters: a list of two
     n_starts = 64         # the zero state included (include_zero = true)
     seed = 0
     # box = [[lo, hi], ...]     one pair per state variable (default: census.default_box)
@@ -315,12 +315,19 @@ def _parse_census(table: dict[str, Any]) -> dict[str, Any]:
     sw = dict(table)
     if "param" not in sw or "values" not in sw:
         raise ConfigError("[census] needs 'param' and 'values'")
-    if not isinstance(sw["param"], str):
-        raise ConfigError(f"[census].param must be a string, got {sw['param']!r}")
-    out: dict[str, Any] = {
-        "param": sw["param"],
-        "values": _values_from_spec(sw["values"], "[census].values"),
-    }
+    param, values = sw["param"], sw["values"]
+    if isinstance(param, list):  # a census over a plane: two names, two value specs
+        if len(param) != 2 or not all(isinstance(p, str) for p in param):
+            raise ConfigError(f"[census].param must be a name or a list of two, got {param!r}")
+        if not isinstance(values, list) or len(values) != 2:
+            raise ConfigError("[census].values must be a list of two value specs for two params")
+        param = tuple(param)
+        values = tuple(_values_from_spec(v, f"[census].values[{i}]") for i, v in enumerate(values))
+    elif isinstance(param, str):
+        values = _values_from_spec(values, "[census].values")
+    else:
+        raise ConfigError(f"[census].param must be a string, got {param!r}")
+    out: dict[str, Any] = {"param": param, "values": values}
     for key in ("n_starts", "seed", "chunk_size"):
         if key in sw:
             v = sw[key]

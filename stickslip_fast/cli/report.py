@@ -34,6 +34,8 @@ def _census_report(path) -> str:
     res = load_census(path)
     done = res.raw["done"].astype(bool)
     lines = _header(f"{path}  (census)", attrs, cfg)
+    if isinstance(cfg["param"], list):
+        return "\n".join(lines + _plane_lines(res, cfg, done))
     v = res.values
     lines.append(
         f"census:    {res.param} in [{v.min():g}, {v.max():g}] ({v.size} values) x "
@@ -63,6 +65,40 @@ def _census_report(path) -> str:
                 f"  basin {frac.min():.2f}-{frac.max():.2f}"
             )
     return "\n".join(lines)
+
+
+def _plane_lines(res, cfg: dict, done: np.ndarray) -> list[str]:
+    """The summary of a census over a plane: grid, progress, tracks, and the maps in brief."""
+    from ..core.poincare import STATUS_NAMES
+
+    (p1, p2), (v1, v2) = res.params, res.values
+    st = cfg["settings"]
+    lines = [
+        f"census:    {p1} in [{v1.min():g}, {v1.max():g}] ({v1.size}) x {p2} in "
+        f"[{v2.min():g}, {v2.max():g}] ({v2.size}) cells x {len(res.starts)} starts, "
+        f"stop={cfg['stop']}",
+        f"settings:  method={st['method']} rtol={st['rtol']:g} t_end={st['t_end']:g} "
+        f"t_transient={st['t_transient']:g} max_points={st['max_points']}",
+        f"progress:  {int(done.sum())} of {done.size} runs done ({100 * done.mean():.1f}%)",
+    ]
+    if not done.any():
+        return lines
+    codes, counts = np.unique(res.status_code[done], return_counts=True)
+    lines.append("status:    " + ", ".join(f"{STATUS_NAMES[c]} {n}" for c, n in zip(codes, counts)))
+    sl = res.sliding_fraction()
+    lines.append(
+        f"cells:     {int(np.sum(sl == 1.0))} steady sliding from every start, "
+        f"{int(np.sum(sl == 0.0))} never, {int(np.sum((sl > 0) & (sl < 1)))} depending on the start"
+    )
+    lines.append(f"tracks:    {len(res.tracks)}")
+    for t in res.tracks:
+        desc = t.kind if t.kind != "orbit" else f"orbit P{'/P'.join(map(str, t.periods))}"
+        i0, i1, j0, j1 = t.extent
+        lines.append(
+            f"  #{t.id:<3d} {desc:<22s} {t.n_cells:5d} cells, {p1} {v1[i0]:g}..{v1[i1]:g}, "
+            f"{p2} {v2[j0]:g}..{v2[j1]:g}"
+        )
+    return lines
 
 
 def _report(path, verify: bool = False) -> str:

@@ -1,0 +1,116 @@
+"""Draw a census over a plane of two parameters: the maps of docs/census.md.
+
+Reads the census file (``stickslip-fast census`` with ``param = [p1, p2]``) through
+:func:`stickslip_fast.analysis.census.load_census` and draws three panels over
+the plane, one cell per grid point:
+
+- **attractors**: the number of attractors found in the cell (from its starts);
+- **steady sliding**: the share of the starts that end in steady sliding (0: stick-slip
+  from every start, 1: sliding from every start; in between it depends on the start);
+- **dominant period**: the period of the attractor with the largest basin (0: steady
+  sliding, "?" for unresolved runs).
+
+Curves (fold or period-doubling curves of a two-parameter continuation) can be laid
+over the panels with ``draw_maps(..., curves=[(values (n, 2), style dict), ...])``.
+
+Usage::
+
+    python3 scripts/plot_census_plane.py out/census_plane_eta_k12.h5 \\
+        -o docs/figures/census_plane_eta_k12.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+LABELS = {"eta": r"$\eta$", "k12": r"$k_{12}$", "vb0": r"$v_{b0}$", "vb": r"$v_b$"}
+
+
+def _edges(v: np.ndarray) -> np.ndarray:
+    """Cell edges around the grid values (midpoints; half a step beyond the ends)."""
+    v = np.asarray(v, dtype=float)
+    if v.size == 1:
+        return np.array([v[0] - 0.5, v[0] + 0.5])
+    mid = 0.5 * (v[1:] + v[:-1])
+    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+
+
+def _discrete(ax, x, y, z, ticks, ticklabels, cmap_name, title):
+    """A map of small integers with one colour each and a labelled colour bar."""
+    cmap = ListedColormap(plt.get_cmap(cmap_name)(np.linspace(0.05, 0.95, len(ticks))))
+    norm = BoundaryNorm(np.arange(len(ticks) + 1) - 0.5, len(ticks))
+    index = np.searchsorted(ticks, z)
+    mesh = ax.pcolormesh(x, y, index.T, cmap=cmap, norm=norm)
+    cb = plt.colorbar(mesh, ax=ax, ticks=np.arange(len(ticks)))
+    cb.ax.set_yticklabels(ticklabels)
+    ax.set_title(title, fontsize=10)
+
+
+def draw_maps(res, axes=None, curves=()):
+    """Draw the three maps of a :class:`CensusPlaneResult` on three axes (made if None)."""
+    if axes is None:
+        _, axes = plt.subplots(1, 3, figsize=(15.5, 4.4))
+    (p1, p2), (v1, v2) = res.params, res.values
+    x, y = _edges(v1), _edges(v2)
+    n_att = res.n_attractors()
+    ticks = np.arange(n_att.min(), n_att.max() + 1)
+    _discrete(axes[0], x, y, n_att, ticks, [str(t) for t in ticks], "viridis", "attractors")
+    mesh = axes[1].pcolormesh(x, y, res.sliding_fraction().T, cmap="coolwarm", vmin=0, vmax=1)
+    plt.colorbar(mesh, ax=axes[1], label="share of the starts")
+    axes[1].set_title("basin fraction of steady sliding", fontsize=10)
+    dom = res.dominant_period()
+    ticks = np.unique(dom)
+    names = {0: "sliding", -1: "?", -2: "failed"}
+    _discrete(axes[2], x, y, dom, ticks, [names.get(int(t), f"P{t}") for t in ticks], "tab10",
+              "period of the largest basin")  # fmt: skip
+    for ax in axes:
+        for values, style in curves:
+            ax.plot(values[:, 0], values[:, 1], **{"color": "k", "lw": 1.2, **style})
+        ax.set_xlabel(LABELS.get(p1, p1))
+        ax.set_ylabel(LABELS.get(p2, p2))
+        ax.set_xlim(x[0], x[-1])
+        ax.set_ylim(y[0], y[-1])
+    return axes
+
+
+def main(argv: list[str] | None = None) -> int:
+    from stickslip_fast.analysis.census import load_census
+    from stickslip_fast.analysis.census_plane import CensusPlaneResult
+
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("file", metavar="CENSUS.h5")
+    p.add_argument("-o", "--output", required=True, metavar="FIG.png")
+    p.add_argument("--title", default=None, help="figure title (default: the file's)")
+    args = p.parse_args(argv)
+    res = load_census(args.file)
+    if not isinstance(res, CensusPlaneResult):
+        p.error(f"{args.file} is a census over one parameter; use scripts/plot_bifurcation.py")
+    fig, axes = plt.subplots(1, 3, figsize=(15.5, 4.4))
+    draw_maps(res, axes)
+    import h5py
+
+    with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
+        title = args.title if args.title is not None else str(h5.attrs.get("title", ""))
+    n1, n2 = res.shape
+    fig.suptitle(f"{title}  ({n1} x {n2} cells x {len(res.starts)} starts)", fontsize=10)
+    fig.tight_layout()
+    out = Path(args.output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=130, bbox_inches="tight")
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
