@@ -9,6 +9,7 @@ import numpy as np
 from ..model.system import System
 from .equilibria import EQUILIBRIUM_SPEED
 from .multishoot import MultiShooting, periodic_multipliers
+from .orbit_record import Orbit
 from .returnmap import SECTION_INDEX, _field, _minimal_period, return_map
 
 
@@ -99,8 +100,6 @@ def find_orbit_multiple(
 
     ``T``: the period in time, if known (else from the p-th return of z).
     """
-    from .orbits import Orbit
-
     ms = MultiShooting(system, segments, rtol, atol, tangent_atol)
     n = system.n_state
     if T is None:
