@@ -36,10 +36,16 @@ from ..core.variational import propagate_sensitivity, propagate_tangents
 from ..model.system import System
 from .returnmap import _MAX_STEPS, SECTION_INDEX, _field, _sensitivity_params
 
-__all__ = ["periodic_multipliers", "MultiShooting", "DEFAULT_SEGMENTS"]
+__all__ = ["periodic_multipliers", "MultiShooting", "refine_mesh", "DEFAULT_SEGMENTS"]
 
 #: Segments per period when none are asked for.
 DEFAULT_SEGMENTS = 8
+
+#: Continuation by multiple shooting bisects the start's segments until none amplifies
+#: by more than this (2-norm of its state-transition matrix; :func:`refine_mesh`): past a
+#: sharp fold nearly all of an orbit's amplification happens in the short passage near
+#: the capture into a stick phase, which even cuts leave in one segment.
+MESH_LIMIT = 10.0
 
 
 def periodic_multipliers(
@@ -118,8 +124,9 @@ class MultiShooting:
     Parameters
     ----------
     system : System
-    segments : int
-        m >= 1.
+    segments : int or array_like
+        m >= 1 (even cuts), or the mesh: m + 1 increasing fractions of the period from
+        0 to 1 (segment i runs over [mesh[i] T, mesh[i + 1] T]; :func:`refine_mesh`).
     rtol, atol, tangent_atol : float
         Integration tolerances (those of :func:`~stickslip_fast.orbits.return_map`).
     param : str, optional
@@ -134,7 +141,12 @@ class MultiShooting:
                  tangent_atol: float, param: str | None = None,
                  param_step: float = 1e-7) -> None:  # fmt: skip
         self.system = system
-        self.m = int(segments)
+        if np.ndim(segments) == 0:
+            self.mesh = np.linspace(0.0, 1.0, int(segments) + 1)
+        else:
+            self.mesh = np.asarray(segments, dtype=float)
+        self.m = self.mesh.size - 1
+        self.frac = np.diff(self.mesh)
         self.n = system.n_state
         self.mask = np.arange(self.n) != SECTION_INDEX
         self.kw = (float(rtol), float(atol), float(tangent_atol))
@@ -186,14 +198,13 @@ class MultiShooting:
         Y, T = self.unpack(u)
         if not (math.isfinite(T) and T > 0):
             return "bad-period", None, None, None
-        tau = T / m
         N = m * n
         extra = 1 if self.sens[0] is not None else 0
         G = np.empty(N)
         DG = np.zeros((N, N + extra))
         phis = []
         for i in range(m):
-            st, y1, U1 = self.flow(Y[i], tau)
+            st, y1, U1 = self.flow(Y[i], self.frac[i] * T)
             if st != "ok":
                 return st, None, None, None
             r = slice(i * n, (i + 1) * n)
@@ -203,7 +214,7 @@ class MultiShooting:
             phis.append(Phi)
             DG[r, self._cols(i)] = Phi[:, mask] if i == 0 else Phi
             DG[r, self._cols(j)] -= np.eye(n)[:, mask] if j == 0 else np.eye(n)
-            DG[r, N - 1] = _field(self.system, y1) / m
+            DG[r, N - 1] = _field(self.system, y1) * self.frac[i]
             if extra:
                 DG[r, N] = U1[:, n]
             if i == m - 1:
@@ -226,14 +237,15 @@ class MultiShooting:
         return [phis[0][:, mask], *phis[1:-1], last]
 
     # ---------------------------------------------------------- conversions
-    def states_at(self, Y: np.ndarray, T_old: float, times: np.ndarray):
-        """States at ``times`` (in [0, T_old)) on the trajectory cut as Y over T_old."""
+    def states_at(self, Y: np.ndarray, T_old: float, times: np.ndarray, mesh=None):
+        """States at ``times`` (in [0, T_old)) on the trajectory cut as Y over T_old (at the
+        fractions ``mesh``, default even)."""
         m_old = Y.shape[0]
-        tau = T_old / m_old
+        starts = T_old * (np.linspace(0, 1, m_old + 1) if mesh is None else np.asarray(mesh))
         out = np.empty((len(times), self.n))
         for k, t in enumerate(times):
-            j = min(int(t // tau), m_old - 1)
-            dt = t - j * tau
+            j = min(int(np.searchsorted(starts, t, side="right")) - 1, m_old - 1)
+            dt = t - starts[j]
             if dt <= 0:
                 out[k] = Y[j]
                 continue
@@ -249,9 +261,9 @@ class MultiShooting:
         rtol, atol, tatol = self.kw
         s = self.system
         variant = kernel_variant(s.n_oscillators, s.is_dc_motor)
-        tau = T / self.m
         ts, ys = [], []
         for i in range(self.m):
+            tau = self.frac[i] * T
             y, t_done = Y[i].copy(), 0.0
             while tau - t_done > 1e-12 * T:
                 args = (np.ascontiguousarray(y), np.eye(n)[:, :1].copy(), s.to_array(),
@@ -265,10 +277,33 @@ class MultiShooting:
                 if not math.isfinite(t):
                     break
                 t_done += t
-                tc = i * tau + t_done
+                tc = self.mesh[i] * T + t_done
                 if 1e-9 * T < tc < T * (1 - 1e-9):
                     ts.append(tc)
                     ys.append(y1.copy())
                 y = y1.copy()
                 y[SECTION_INDEX] = 0.0
         return "ok", np.array(ts), np.array(ys).reshape(len(ys), n)
+
+
+def refine_mesh(
+    ms: MultiShooting, Y: np.ndarray, T: float, limit: float = 4.0, max_segments: int = 64
+) -> np.ndarray:
+    """A mesh in which no segment amplifies by more than ``limit`` (2-norm of Phi), by
+    bisecting the segments of ``ms`` (starts Y over T) that do, up to ``max_segments``."""
+    mesh = list(ms.mesh)
+    starts = list(Y)
+    i = 0
+    while i < len(mesh) - 1 and len(mesh) - 1 < max_segments:
+        dt = (mesh[i + 1] - mesh[i]) * T
+        st, _, U = ms.flow(starts[i], dt)
+        if st != "ok" or np.linalg.norm(U[:, : ms.n], 2) <= limit or dt < 1e-6 * T:
+            i += 1
+            continue
+        st, y_mid, _ = ms.flow(starts[i], 0.5 * dt, tangents=False)
+        if st != "ok":
+            i += 1
+            continue
+        mesh.insert(i + 1, 0.5 * (mesh[i] + mesh[i + 1]))
+        starts.insert(i + 1, y_mid)
+    return np.array(mesh)

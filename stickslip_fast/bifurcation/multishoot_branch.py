@@ -15,7 +15,7 @@ import numpy as np
 from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
 from .equilibria import EQUILIBRIUM_SPEED
-from .multishoot import MultiShooting, periodic_multipliers
+from .multishoot import MultiShooting, periodic_multipliers, refine_mesh
 from .multishoot_orbit import initial_segments, newton_multiple
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
@@ -63,18 +63,27 @@ def ms_evaluator(system0, param: str, segments: int, rtol: float, atol: float, f
     return evaluate, system_at, shooting_at
 
 
-def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol):
-    """x = (u, lambda) of the orbit through z (period T) on the section, corrected by
-    Newton at fixed lambda; None if it does not converge."""
+def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit=None):
+    """(x, mesh): x = (u, lambda) of the orbit through z (period T) on the section, corrected
+    by Newton at fixed lambda, or None if it does not converge. With ``mesh_limit``, the
+    mesh is refined where a segment amplifies more than that (:func:`refine_mesh`) and
+    the orbit corrected again on it."""
     _, _, shooting_at = ms_evaluator(system, param, segments, rtol, atol, fd_step)
     ms = shooting_at(getattr(system, param), None)
     st, Y = initial_segments(ms, z, T)
     if st != "ok":
-        return None
+        return None, ms.mesh
     status, _, u, _, _, _, _ = newton_multiple(ms, ms.pack(Y, T), tol, 12)
+    if status == "converged" and mesh_limit is not None:
+        Y, T = ms.unpack(u)
+        mesh = refine_mesh(ms, Y, T, mesh_limit)
+        st, Y = ms.states_at(Y, T, mesh[:-1] * T, mesh=ms.mesh)
+        _, _, shooting_at = ms_evaluator(system, param, mesh, rtol, atol, fd_step)
+        ms = shooting_at(getattr(system, param), None)
+        status, _, u, _, _, _, _ = newton_multiple(ms, ms.pack(Y, T), tol, 12)
     if status != "converged":
-        return None
-    return np.r_[u, float(getattr(system, param))]
+        return None, ms.mesh
+    return np.r_[u, float(getattr(system, param))], ms.mesh
 
 
 def continue_multiple(system0, param, period, x0, direction, bounds, *, segments, ds, ds_min,

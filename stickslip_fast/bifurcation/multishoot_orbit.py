@@ -17,7 +17,7 @@ def initial_segments(ms: MultiShooting, z: np.ndarray, T: float):
     """(status, Y): the segment starts of the trajectory from z on the section over T."""
     z = np.array(z, dtype=float)
     z[SECTION_INDEX] = 0.0
-    return ms.states_at(z[None, :], T, np.arange(ms.m) * (T / ms.m))
+    return ms.states_at(z[None, :], T, ms.mesh[:-1] * T)
 
 
 def newton_multiple(ms: MultiShooting, u: np.ndarray, tol: float, max_iter: int):
@@ -134,7 +134,7 @@ def find_orbit_multiple(
         if k == 0:
             break
         rotated = True  # start again from the crossing with the smallest x1
-        st, Y = ms.states_at(Y, T, (tc[k - 1] + np.arange(ms.m) * (T / ms.m)) % T)
+        st, Y = ms.states_at(Y, T, (tc[k - 1] + ms.mesh[:-1] * T) % T, mesh=ms.mesh)
         Y[0][SECTION_INDEX] = 0.0
     mult = periodic_multipliers(factors)
     p_found = points.shape[0]

@@ -12,7 +12,7 @@ from ..base.messages import plain
 from ..model.system import SWEEPABLE
 from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
-from .multishoot import DEFAULT_SEGMENTS
+from .multishoot import DEFAULT_SEGMENTS, MESH_LIMIT
 from .multishoot_branch import append_branch, continue_multiple, ms_start
 from .orbits import (
     EQUILIBRIUM_SPEED,
@@ -233,12 +233,12 @@ def continue_orbit(
     kw = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol, rtol=rtol,
               atol=atol, fd_step=fd_step, stick_events=stick_events, sharp_ends=sharp_ends)  # fmt: skip
     if shooting == "multiple":
-        x0 = ms_start(orbit.system, orbit.points[0], orbit.T, param, int(segments), rtol, atol,
-                      fd_step, tol)  # fmt: skip
+        x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, int(segments), rtol,
+                            atol, fd_step, tol, MESH_LIMIT)  # fmt: skip
         if x0 is None:
             raise ValueError("orbit could not be corrected by multiple shooting")
         return continue_multiple(orbit.system, param, orbit.period, x0, direction, (lo, hi),
-                                 segments=int(segments), stages=SHARP_END_STAGES, **kw)  # fmt: skip
+                                 segments=mesh, stages=SHARP_END_STAGES, **kw)  # fmt: skip
     branch = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
     if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
         branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw)
@@ -257,8 +257,8 @@ def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> 
     param = branch.param
     lam = float(branch.values[-1])
     system = dataclasses.replace(orbit.system, **{param: lam})
-    x0 = ms_start(system, branch.points[-1], float(branch.T[-1]), param, segments, rtol, atol,
-                  kw["fd_step"], tol)  # fmt: skip
+    x0, mesh = ms_start(system, branch.points[-1], float(branch.T[-1]), param, segments, rtol,
+                        atol, kw["fd_step"], tol, MESH_LIMIT)  # fmt: skip
     if x0 is None:
         return branch
     direction = float(np.sign(branch.values[-1] - branch.values[-2]) or 1.0)
@@ -266,7 +266,7 @@ def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> 
                ds_min=ds_min, max_points=kw["max_points"] - branch.values.size + 1)  # fmt: skip
     kw2["ds"] = min(kw2["ds"], kw["ds_max"])
     second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
-                               segments=segments, stages=(), **kw2)  # fmt: skip
+                               segments=mesh, stages=(), **kw2)  # fmt: skip
     second.system = orbit.system
     return append_branch(branch, second, f"single shooting: {branch.status}")
 
