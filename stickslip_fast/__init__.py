@@ -32,6 +32,7 @@ from .bifurcation.continuation import (
     join_branches,
     switch_branch,
 )
+from .bifurcation.curve import Codim2Point, Curve, continue_bifurcation
 from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
 from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
@@ -70,6 +71,9 @@ __all__ = [
     "join_branches",
     "Branch",
     "Bifurcation",
+    "continue_bifurcation",
+    "Curve",
+    "Codim2Point",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",

@@ -12,9 +12,12 @@ from ..base.messages import plain
 from ..model.system import SWEEPABLE
 from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
+from .multishoot import DEFAULT_SEGMENTS, MESH_LIMIT
+from .multishoot_branch import append_branch, continue_multiple, ms_start
 from .orbits import (
     EQUILIBRIUM_SPEED,
     SECTION_INDEX,
+    SHOOTING_MODES,
     Orbit,
     _field,
     return_map,
@@ -155,6 +158,8 @@ def continue_orbit(
     fd_step: float = 1e-7,
     stick_events: bool = True,
     sharp_ends: bool = True,
+    shooting: str = "single",
+    segments: int = DEFAULT_SEGMENTS,
 ) -> Branch:
     """Continue a periodic orbit in one parameter (pseudo-arclength).
 
@@ -196,6 +201,16 @@ def continue_orbit(
         period-1 branch (docs/limits.md). The branch keeps the tighter settings
         from there on; ``T`` and the points are those of the stage that
         computed them.
+    shooting : {"single", "multiple", "auto"}
+        "single": fixed points of the return map. "multiple": the orbit as
+        ``segments`` segments (:mod:`.multishoot`; the arclength then measures
+        all segment starts and T, so ``ds`` means a longer step in the orbit
+        than with single shooting). "auto": single, and where it ends with
+        "step-too-small" or "precision-limit", multiple shooting from its last
+        point on (same direction in the parameter, the tightest stage's
+        tolerances), appended to the branch (``status`` names both ends).
+    segments : int
+        m >= 1, the segments of multiple shooting.
 
     Returns
     -------
@@ -211,6 +226,54 @@ def continue_orbit(
         raise ValueError("orbit must be a converged Orbit from find_orbit")
     lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
                                max_points)  # fmt: skip
+    if shooting not in SHOOTING_MODES:
+        raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
+    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
+        raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
+    kw = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol, rtol=rtol,
+              atol=atol, fd_step=fd_step, stick_events=stick_events, sharp_ends=sharp_ends)  # fmt: skip
+    if shooting == "multiple":
+        x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, int(segments), rtol,
+                            atol, fd_step, tol, MESH_LIMIT)  # fmt: skip
+        if x0 is None:
+            raise ValueError("orbit could not be corrected by multiple shooting")
+        return continue_multiple(orbit.system, param, orbit.period, x0, direction, (lo, hi),
+                                 segments=mesh, stages=SHARP_END_STAGES, **kw)  # fmt: skip
+    branch = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
+    if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
+        branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw)
+    return branch
+
+
+def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> Branch:
+    """``branch`` continued by multiple shooting from its last point (shooting="auto")."""
+    if branch.values.size < 2 or kw["max_points"] - branch.values.size < 2:
+        return branch
+    # the tightest tolerances the single-shooting branch used (the last sharp-end stage)
+    tol, rtol, atol, ds_min = kw["tol"], kw["rtol"], kw["atol"], kw["ds_min"]
+    if kw["sharp_ends"]:
+        for stage in SHARP_END_STAGES:
+            tol, rtol, atol, ds_min = (min(a, b) for a, b in zip((tol, rtol, atol, ds_min), stage))
+    param = branch.param
+    lam = float(branch.values[-1])
+    system = dataclasses.replace(orbit.system, **{param: lam})
+    x0, mesh = ms_start(system, branch.points[-1], float(branch.T[-1]), param, segments, rtol,
+                        atol, kw["fd_step"], tol, MESH_LIMIT)  # fmt: skip
+    if x0 is None:
+        return branch
+    direction = float(np.sign(branch.values[-1] - branch.values[-2]) or 1.0)
+    kw2 = dict(kw, tol=tol, rtol=rtol, atol=atol, ds=max(kw["ds_min"], ds_min * 100),
+               ds_min=ds_min, max_points=kw["max_points"] - branch.values.size + 1)  # fmt: skip
+    kw2["ds"] = min(kw2["ds"], kw["ds_max"])
+    second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
+                               segments=mesh, stages=(), **kw2)  # fmt: skip
+    second.system = orbit.system
+    return append_branch(branch, second, f"single shooting: {branch.status}")
+
+
+def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_max, max_points,
+                     tol, rtol, atol, fd_step, stick_events, sharp_ends) -> Branch:  # fmt: skip
+    """continue_orbit with shooting="single" (its arguments)."""
     system0 = orbit.system
     p = orbit.period
     evaluate, full, system_at, periods = _orbit_evaluator(system0, param, p, rtol, atol, fd_step)

@@ -42,7 +42,6 @@ coordinate directions.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -57,6 +56,9 @@ from .equilibria import (  # noqa: F401
     _sliding_guess,
     find_equilibrium,
 )
+from .multishoot import DEFAULT_SEGMENTS
+from .multishoot_orbit import find_orbit_multiple
+from .orbit_record import ORBIT_STATUSES, Orbit
 from .returnmap import (  # noqa: F401
     _DEFAULT_ATOL,
     _DEFAULT_RTOL,
@@ -70,6 +72,7 @@ from .returnmap import (  # noqa: F401
     _sensitivity_params,
     return_map,
 )
+from .stickphases import STICK_SPEED, stick_phases
 
 __all__ = [
     "Orbit",
@@ -83,84 +86,8 @@ __all__ = [
 ]
 
 
-#: A disk sticks while its slip speed sqrt((dx - v_b)^2 + dphi^2) is below this many
-#: eps (the friction law's regularisation; 100 eps = 1e-3 at the presets): far below
-#: the slip speeds of a slip phase, far above the creep inside a stick phase.
-STICK_SPEED = 100.0
-
-
-#: Outcomes of :func:`find_orbit` (``Orbit.status``).
-ORBIT_STATUSES = (
-    "converged",  # residual <= tol: a fixed point of P^p
-    "max-iter",  # max_iter Newton steps without reaching tol
-    "no-progress",  # the damped step could not reduce the residual
-    "lower-period",  # converged, but the points repeat with a divisor of the period asked for
-    "equilibrium",  # converged onto a rest point (|f| ~ 0 there), not an orbit
-    "integration-failed",  # the return map could not be evaluated at the start
-)
-
-
-@dataclass
-class Orbit:
-    """A periodic orbit found by :func:`find_orbit`.
-
-    Attributes
-    ----------
-    system : System
-    period : int
-        p: the number of section crossings per period.
-    points : ndarray, shape (p, n_state)
-        The states at the p crossings of the section (dx1 = 0 upward, the local
-        minima of x1), in time order, starting at the one with the smallest x1.
-    times : ndarray, shape (p,)
-        Time from ``points[0]`` to each following crossing; ``times[-1]`` is T.
-    T : float
-        The period in time (NaN when the map could not be evaluated).
-    multipliers : ndarray of complex, shape (n_state - 1,)
-        Nontrivial Floquet multipliers: the eigenvalues of the return map's
-        Jacobian in section coordinates, largest modulus first.
-    stable : bool
-        Converged and every multiplier inside the unit circle.
-    jacobian : ndarray, shape (n_state - 1, n_state - 1)
-        D P^p at ``points[0]`` in section coordinates (the state without dx1).
-    residual : float
-        ``max |P^p(z) - z|`` over the section coordinates at ``points[0]``.
-    iterations : int
-        Newton steps taken.
-    converged : bool
-        ``status == "converged"``.
-    status : str
-        One of :data:`ORBIT_STATUSES`.
-    message : str
-        What happened, in words (why it failed, for a failure).
-    """
-
-    system: System
-    period: int
-    points: np.ndarray
-    times: np.ndarray
-    T: float
-    multipliers: np.ndarray
-    stable: bool
-    jacobian: np.ndarray
-    residual: float
-    iterations: int
-    converged: bool
-    status: str
-    message: str = ""
-    history: list[float] = field(default_factory=list, repr=False)
-
-    @property
-    def state_names(self) -> list[str]:
-        """Column names of ``points``."""
-        return self.system.state_names
-
-    def __repr__(self) -> str:
-        mult = ", ".join(f"{m:.4g}" for m in self.multipliers[:3])
-        return (
-            f"Orbit(status={self.status!r}, period={self.period}, T={self.T:.10g}, "
-            f"residual={self.residual:.2e}, multipliers=[{mult}], stable={self.stable})"
-        )
+#: The ``shooting`` choices of :func:`find_orbit` and :func:`continue_orbit`.
+SHOOTING_MODES = ("single", "multiple", "auto")
 
 
 # ------------------------------------------------------------------ orbits
@@ -224,6 +151,8 @@ def find_orbit(
     atol: float = _DEFAULT_ATOL,
     t_max: float = 1e4,
     tangent_atol: float = _TANGENT_ATOL,
+    shooting: str = "single",
+    segments: int = DEFAULT_SEGMENTS,
 ) -> Orbit:
     """Find a periodic orbit by damped Newton on P^p(z) - z over the section.
 
@@ -252,6 +181,16 @@ def find_orbit(
     tangent_atol : float
         Tolerance of the tangent vectors relative to their length (see
         :func:`return_map`).
+    shooting : {"single", "multiple", "auto"}
+        "single": Newton on the return map. "multiple": the period cut evenly in
+        time into ``segments`` segments joined by continuity (:mod:`.multishoot`;
+        the multipliers from the segments' factors by a periodic QR scheme), for
+        orbits so unstable that one integration over the period amplifies its
+        rounding beyond ``tol``. "auto": single, then multiple from the same start
+        where single shooting fails ("no-progress" or "max-iter": its precision
+        limit, docs/limits.md).
+    segments : int
+        m >= 1, the segments of multiple shooting.
 
     Returns
     -------
@@ -281,12 +220,31 @@ def find_orbit(
     >>> orbit.multipliers[0].real  # doctest: +SKIP
     -0.0969...
     """
+    _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter)
+    if shooting not in SHOOTING_MODES:
+        raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
+    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
+        raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
+    period = None if period is None else int(period)
+    z, period = _start_from(system, start, period, t_max)
+    kw = dict(tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, t_max=t_max,
+              tangent_atol=tangent_atol)  # fmt: skip
+    if shooting == "multiple":
+        return find_orbit_multiple(system, z, period, segments=int(segments), **kw)
+    orbit = _find_single(system, z, period, **kw)
+    if shooting == "auto" and orbit.status in ("no-progress", "max-iter"):
+        multi = find_orbit_multiple(system, z, period, segments=int(segments), **kw)
+        if multi.converged or multi.residual < orbit.residual:
+            return multi
+    return orbit
+
+
+def _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter) -> None:
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     if period is not None:
         if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or period < 1:
             raise ValueError(f"period must be an integer >= 1, got {plain(period)}")
-        period = int(period)
     for name, v in (
         ("tol", tol), ("rtol", rtol), ("atol", atol), ("t_max", t_max),
         ("tangent_atol", tangent_atol),
@@ -295,7 +253,10 @@ def find_orbit(
             raise ValueError(f"{name} must be a finite number > 0, got {plain(v)}")
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 0:
         raise ValueError(f"max_iter must be an integer >= 0, got {max_iter!r}")
-    z, period = _start_from(system, start, period, t_max)
+
+
+def _find_single(system, z, period, *, tol, max_iter, rtol, atol, t_max, tangent_atol) -> Orbit:
+    """Single shooting: damped Newton on P^p(z) - z from z (find_orbit's default)."""
     n = system.n_state
     mask = np.arange(n) != SECTION_INDEX
     z = z.copy()
@@ -337,38 +298,55 @@ def find_orbit(
             break
         if it >= max_iter:
             break
-        g = pts[-1][mask] - z[mask]
-        try:
-            dz = np.linalg.solve(jac - np.eye(n - 1), -g)
-        except np.linalg.LinAlgError:
-            status, message = "no-progress", "D P^p - I is singular (a multiplier at +1)"
+        done, step = _newton_step(evaluate, z, pts, jac, res, mask)
+        it += done != "singular"
+        if done != "ok":
+            status, message = step
             break
-        it += 1
-        lam = 1.0
-        for _ in range(21):
-            z_new = z.copy()
-            z_new[mask] += lam * dz
-            st_n, pts_n, times_n, jac_n, res_n = evaluate(z_new)
-            if st_n == "ok" and res_n < res:
-                break
-            lam *= 0.5
-        else:
-            status = "no-progress"
-            message = f"no step along the Newton direction reduces the residual {res:.3g}"
-            break
-        z, pts, times, jac, res = z_new, pts_n, times_n, jac_n, res_n
+        z, pts, times, jac, res = step
         history.append(res)
     if status == "converged":
-        # points in time order from z: z, then crossings 1..p-1
-        q = _minimal_period(np.vstack([z, pts[:-1]]), tol)
-        speed = float(np.max(np.abs(_field(system, z))))
-        if speed < EQUILIBRIUM_SPEED:
-            status = "equilibrium"
-            message = f"converged onto a rest point (max |f| = {speed:.2g}): use find_equilibrium"
-        elif q < period:
-            status = "lower-period"
-            message = f"converged onto an orbit of period {q}, a divisor of period={period}"
+        status, message = _classify(system, z, pts, period, tol)
     return _orbit(system, period, z, pts, times, jac, res, it, status, message, history)
+
+
+def _newton_step(evaluate, z, pts, jac, res, mask):
+    """One damped Newton step: ("ok", (z, pts, times, jac, res)) or ("singular" | "stuck",
+    (status, message)); a singular system takes no step, a stuck one counts as one."""
+    n = z.size
+    g = pts[-1][mask] - z[mask]
+    try:
+        dz = np.linalg.solve(jac - np.eye(n - 1), -g)
+    except np.linalg.LinAlgError:
+        return "singular", ("no-progress", "D P^p - I is singular (a multiplier at +1)")
+    lam = 1.0
+    for _ in range(21):
+        z_new = z.copy()
+        z_new[mask] += lam * dz
+        st_n, pts_n, times_n, jac_n, res_n = evaluate(z_new)
+        if st_n == "ok" and res_n < res:
+            return "ok", (z_new, pts_n, times_n, jac_n, res_n)
+        lam *= 0.5
+    msg = f"no step along the Newton direction reduces the residual {res:.3g}"
+    return "stuck", ("no-progress", msg)
+
+
+def _classify(system, z, pts, period, tol):
+    """(status, message) of a converged fixed point: an orbit, a rest point or a lower period."""
+    # points in time order from z: z, then crossings 1..p-1
+    q = _minimal_period(np.vstack([z, pts[:-1]]), tol)
+    speed = float(np.max(np.abs(_field(system, z))))
+    if speed < EQUILIBRIUM_SPEED:
+        return (
+            "equilibrium",
+            f"converged onto a rest point (max |f| = {speed:.2g}): use find_equilibrium",
+        )
+    if q < period:
+        return (
+            "lower-period",
+            f"converged onto an orbit of period {q}, a divisor of period={period}",
+        )
+    return "converged", ""
 
 
 def _orbit(system, period, z, pts, times, jac, res, it, status, message, history) -> Orbit:
@@ -396,71 +374,3 @@ def _orbit(system, period, z, pts, times, jac, res, it, status, message, history
         message=message,
         history=history,
     )
-
-
-def stick_phases(
-    system: System,
-    point: np.ndarray,
-    T: float,
-    *,
-    threshold: float = STICK_SPEED,
-    n_samples: int = 20000,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-) -> np.ndarray:
-    """The stick phases of a periodic orbit: their durations, one per phase and disk.
-
-    Integrates one period T from ``point`` (on the orbit) and samples it
-    ``n_samples`` times. A disk sticks while its slip speed
-    sqrt((dx_i - v_b)^2 + dphi_i^2) is below ``threshold`` eps; a stick phase is a
-    maximal run of sticking samples, counted cyclically (a phase across t = 0 = T
-    is one phase). For N disks the phases of every disk are listed.
-
-    Parameters
-    ----------
-    system : System
-    point : array_like, shape (n_state,)
-        A state on the orbit (e.g. ``orbit.points[0]``).
-    T : float
-        The period in time.
-    threshold : float
-        Stick speed in units of ``system.eps`` (:data:`STICK_SPEED`).
-    n_samples : int
-        Samples per period; phases shorter than T / n_samples may be missed.
-    rtol, atol : float
-        Integration tolerances.
-
-    Returns
-    -------
-    ndarray
-        The durations of the stick phases (its length is their number; empty
-        for a pure slip orbit; ``[T]`` for a disk that never slips).
-
-    Raises
-    ------
-    ValueError
-        For a non-finite or non-positive T, or a state of the wrong size.
-    """
-    y0 = _finite_state("point", point, system.n_state)
-    if not (math.isfinite(T) and T > 0):
-        raise ValueError(f"T must be a finite number > 0, got {T!r}")
-    dt = T / n_samples
-    r = simulate(system, T, y0=y0, sample_dt=dt, rtol=rtol, atol=atol, max_points=1)
-    y = r.y[:n_samples]
-    if y.shape[0] < n_samples or not np.all(np.isfinite(y)):
-        raise ValueError(f"the orbit could not be sampled over one period (status {r.status!r})")
-    n = system.n_oscillators
-    vb = y[:, -1] if system.is_dc_motor else np.full(len(y), system.vb)
-    out = []
-    for i in range(n):
-        speed = np.hypot(y[:, 4 * i + 1] - vb, y[:, 4 * i + 3])
-        stick = speed < threshold * system.eps
-        if stick.all():
-            out.append(float(T))
-            continue
-        # cyclic runs: start at a slipping sample so that no run wraps around
-        k0 = int(np.argmin(stick))
-        st = np.roll(stick, -k0)
-        edges = np.flatnonzero(np.diff(np.r_[0, st.astype(np.int8), 0]))
-        out.extend(float((b - a) * dt) for a, b in zip(edges[::2], edges[1::2]))
-    return np.array(out)

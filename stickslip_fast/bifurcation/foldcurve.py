@@ -1,0 +1,147 @@
+"""Curves of codim-1 points in two parameters by a minimally augmented system.
+
+For a map's fixed points G(z, l1, l2) = P(z) - z = 0 (or an ODE's equilibria, G = f), a
+fold (a multiplier at +1) is where M = D_z G is singular, a period-doubling where
+M = D_z G + 2 I is. The test function g comes from the bordered system
+
+    [ M    b ] [v]   [0]          [ M^T  c ] [w]   [0]
+    [ c^T  0 ] [g] = [1],         [ b^T  0 ] [.] = [1],
+
+(b, c: the left and right null vectors of M at the start), g = 0 exactly where M is
+singular, and its gradient is dg/dx_k = -w^T (dM/dx_k) v. The second derivatives need no
+difference of the map: dM/dx_k v is the derivative along v of the k-th column of D G,
+(D G(x + h v) - D G(x - h v)) / 2h, two more Jacobian evaluations per point. The curve
+F(z, l1, l2) = (G, g) = 0 is followed by :func:`.arclength.pseudo_arclength` in
+x = (z, l1, l2), with l2 the "lambda" its bounds apply to.
+
+Codim-2 points on a fold curve: where the tangent's l2 component changes sign the curve
+turns back in l2 (an "extremum": on one side of it, at fixed l2, the two folds of a
+one-parameter branch meet and vanish); where both parameter components vanish there the
+curve has a "cusp" (the fold's quadratic coefficient vanishes: x' = a + b x - x^3 at
+a = b = 0).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from .arclength import _correct, _tangent, pseudo_arclength
+
+#: Kinds of codim-1 curves :func:`follow_curve` continues (the shift of M = D_z G + shift I).
+CURVE_KINDS = {"fold": 0.0, "period-doubling": 2.0}
+
+#: A located sign change of a parameter component of the tangent is a cusp where the
+#: tangent's parameter components are both below this (it is a unit vector).
+CUSP_SPEED = 1e-3
+
+
+def border(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(b, c): the left and right singular vectors of M's smallest singular value."""
+    U, _, Vt = np.linalg.svd(M)
+    return U[:, -1].copy(), Vt[-1].copy()
+
+
+def _bordered(M, b, c):
+    n = M.shape[0]
+    K = np.zeros((n + 1, n + 1))
+    K[:n, :n] = M
+    K[:n, n] = b
+    K[n, :n] = c
+    rhs = np.zeros(n + 1)
+    rhs[-1] = 1.0
+    sol = np.linalg.solve(K, rhs)
+    solT = np.linalg.solve(K.T, rhs)
+    return sol[:n], solT[:n], float(sol[n])
+
+
+def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray, h: float):
+    """The evaluator of F = (G, g) for :func:`pseudo_arclength`, from ``base``.
+
+    ``base(x)`` -> (ok, G (n_z,), DG (n_z x (n_z + 2)), A) at x = (z, l1, l2): the
+    residual, its Jacobian in (z, l1, l2), and the map's Jacobian (whatever the
+    spectrum function wants). ``h``: the step of the directional difference along v.
+    """
+    shift = CURVE_KINDS[kind]
+    eye = np.eye(n_z)
+
+    def evaluate(x):
+        ok, G, DG, A = base(x)
+        if not ok:
+            return False, None, None, None
+        try:
+            v, w, g = _bordered(DG[:, :n_z] + shift * eye, b, c)
+        except np.linalg.LinAlgError:
+            return False, None, None, None
+        nv = float(np.linalg.norm(v))
+        dx = np.zeros_like(x)
+        dx[:n_z] = h * v / nv
+        ok_p, _, DGp, _ = base(x + dx)
+        ok_m, _, DGm, _ = base(x - dx)
+        if not (ok_p and ok_m):
+            return False, None, None, None
+        grad = -(w @ (DGp - DGm)) * (nv / (2 * h))
+        return True, np.r_[G, g], np.vstack([DG, grad]), A
+
+    return evaluate
+
+
+def curve_tests(A, t: np.ndarray) -> dict[str, float]:
+    """Test functions along a curve: the tangent's components in l1 and l2."""
+    return {"turn-1": float(t[-2]), "turn-2": float(t[-1])}
+
+
+def follow_curve(
+    base: Callable,
+    x0: np.ndarray,
+    kind: str,
+    direction: float,
+    bounds2: tuple[float, float],
+    *,
+    ds: float,
+    ds_min: float,
+    ds_max: float,
+    max_points: int,
+    tol: float,
+    h: float = 1e-7,
+    spectrum: Callable | None = None,
+    locate_tol: float = 1e-9,
+):
+    """Follow a codim-1 curve through x0 = (z, l1, l2), a point near it.
+
+    x0 is first corrected onto the curve at fixed l2. Returns (xs, mults, codim2, status,
+    x_start) with codim2 a list of (kind, index, x); ``status`` as
+    :func:`pseudo_arclength`'s, or "start-failed" (x0 could not be corrected).
+    """
+    n_z = x0.size - 2
+    ok, G, DG, _ = base(x0)
+    if not ok:
+        return None, None, [], "start-failed", x0
+    b, c = border(DG[:, :n_z] + CURVE_KINDS[kind] * np.eye(n_z))
+    evaluate = augmented(base, n_z, kind, b, c, h)
+    e2 = np.zeros_like(x0)
+    e2[-1] = 1.0
+    okc, x_start, _, _ = _correct(evaluate, x0, e2, x0, tol, 12)
+    if not okc:
+        return None, None, [], "start-failed", x0
+    xs, mults, bifs, status = pseudo_arclength(
+        evaluate, x_start, direction, bounds2, ds=ds, ds_min=ds_min, ds_max=ds_max,
+        max_points=max_points, tol=tol, locate_tol=locate_tol, tests=curve_tests,
+        spectrum=spectrum,
+    )  # fmt: skip
+    codim2 = []
+    for name, _, index, x in bifs:
+        ok, _, DF, _ = evaluate(x)
+        t = _tangent(DF, xs[index + 1] - xs[index]) if ok else np.full(x.size, np.nan)
+        if abs(t[-1]) < CUSP_SPEED and abs(t[-2]) < CUSP_SPEED:
+            codim2.append(("cusp", index, x))
+        elif name == "turn-2":
+            codim2.append(("extremum", index, x))
+    # a cusp shows as a sign change of one component and a double zero of the other:
+    # keep one entry per place
+    out = []
+    for entry in codim2:
+        if not out or entry[0] != out[-1][0] or abs(entry[1] - out[-1][1]) > 1:
+            out.append(entry)
+    return xs, mults, out, status, x_start

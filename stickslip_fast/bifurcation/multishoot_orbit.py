@@ -1,0 +1,159 @@
+"""find_orbit by multiple shooting: damped Newton on the system of :mod:`.multishoot`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model.system import System
+from .equilibria import EQUILIBRIUM_SPEED
+from .multishoot import MultiShooting, periodic_multipliers
+from .orbit_record import Orbit
+from .returnmap import SECTION_INDEX, _field, _minimal_period, return_map
+
+
+def initial_segments(ms: MultiShooting, z: np.ndarray, T: float):
+    """(status, Y): the segment starts of the trajectory from z on the section over T."""
+    z = np.array(z, dtype=float)
+    z[SECTION_INDEX] = 0.0
+    return ms.states_at(z[None, :], T, ms.mesh[:-1] * T)
+
+
+def newton_multiple(ms: MultiShooting, u: np.ndarray, tol: float, max_iter: int):
+    """Damped Newton on G(u) = 0 (halving the step until max |G| decreases, at most 20 times).
+
+    Returns (status, message, u, factors, residual, iterations, history); status as in
+    :data:`~stickslip_fast.orbits.ORBIT_STATUSES`.
+    """
+    st, G, DG, factors = ms.evaluate(u)
+    if st != "ok":
+        return (
+            "integration-failed",
+            f"the segments failed at the start: {st}",
+            u,
+            None,
+            math.inf,
+            0,
+            [math.inf],
+        )
+    res = float(np.max(np.abs(G)))
+    history = [res]
+    it = 0
+    while res > tol:
+        if it >= max_iter:
+            return (
+                "max-iter",
+                f"no convergence to tol={tol:g} in {max_iter} Newton steps",
+                u,
+                factors,
+                res,
+                it,
+                history,
+            )
+        try:
+            du = np.linalg.solve(DG, -G)
+        except np.linalg.LinAlgError:
+            return "no-progress", "the shooting Jacobian is singular", u, factors, res, it, history
+        it += 1
+        lam = 1.0
+        for _ in range(21):
+            u_new = u + lam * du
+            st_n, G_n, DG_n, f_n = ms.evaluate(u_new)
+            if st_n == "ok":
+                res_n = float(np.max(np.abs(G_n)))
+                if res_n < res:
+                    break
+            lam *= 0.5
+        else:
+            msg = f"no step along the Newton direction reduces the residual {res:.3g}"
+            return "no-progress", msg, u, factors, res, it, history
+        u, G, DG, factors, res = u_new, G_n, DG_n, f_n, res_n
+        history.append(res)
+    return "converged", "", u, factors, res, it, history
+
+
+def product(factors: list[np.ndarray]) -> np.ndarray:
+    """The section Jacobian formed explicitly (for ``Orbit.jacobian``; its eigenvalues are
+    taken from the factors by :func:`periodic_multipliers`, not from this product)."""
+    P = factors[0]
+    for A in factors[1:]:
+        P = A @ P
+    return P
+
+
+def find_orbit_multiple(
+    system: System,
+    z: np.ndarray,
+    period: int,
+    *,
+    segments: int,
+    tol: float,
+    max_iter: int,
+    rtol: float,
+    atol: float,
+    t_max: float,
+    tangent_atol: float,
+    T: float | None = None,
+):
+    """:func:`~stickslip_fast.orbits.find_orbit` with ``shooting="multiple"`` (its arguments).
+
+    ``T``: the period in time, if known (else from the p-th return of z).
+    """
+    ms = MultiShooting(system, segments, rtol, atol, tangent_atol)
+    n = system.n_state
+    if T is None:
+        st, _, times, _ = return_map(system, z, period, rtol=rtol, atol=atol, t_max=t_max,
+                                     tangents=False)  # fmt: skip
+        T = float(times[-1]) if st == "ok" else math.nan
+    nan_orbit = dict(system=system, period=period, points=np.array(z, float)[None, :],
+                     times=np.array([math.nan]), T=math.nan,
+                     multipliers=np.full(n - 1, np.nan, complex), stable=False,
+                     jacobian=np.full((n - 1, n - 1), np.nan), residual=math.inf,
+                     iterations=0, converged=False)  # fmt: skip
+    st, Y = initial_segments(ms, z, T) if math.isfinite(T) else ("no-crossings", None)
+    if st != "ok":
+        return Orbit(**nan_orbit, status="integration-failed",
+                     message=f"no trajectory from the start to cut into segments: {st}")  # fmt: skip
+    rotated = False
+    total_it = 0
+    while True:
+        status, message, u, factors, res, it, history = newton_multiple(
+            ms, ms.pack(Y, T), tol, max_iter
+        )
+        total_it += it
+        Y, T = ms.unpack(u)
+        if factors is None:
+            return Orbit(**{**nan_orbit, "residual": res}, status=status, message=message)
+        st, tc, yc = ms.crossings(Y, T)
+        points = np.vstack([Y[0][None, :], yc])
+        times = np.r_[tc, T]
+        if status != "converged" or rotated or points.shape[0] < 2:
+            break
+        k = int(np.argmin(points[:, 0]))
+        if k == 0:
+            break
+        rotated = True  # start again from the crossing with the smallest x1
+        st, Y = ms.states_at(Y, T, (tc[k - 1] + ms.mesh[:-1] * T) % T, mesh=ms.mesh)
+        Y[0][SECTION_INDEX] = 0.0
+    mult = periodic_multipliers(factors)
+    p_found = points.shape[0]
+    if status == "converged":
+        speed = float(np.max(np.abs(_field(system, Y[0]))))
+        q = _minimal_period(points, tol)
+        if speed < EQUILIBRIUM_SPEED:
+            status = "equilibrium"
+            message = f"converged onto a rest point (max |f| = {speed:.2g}): use find_equilibrium"
+        elif q < p_found:
+            status = "lower-period"
+            message = f"converged onto an orbit of period {q}, a divisor of {p_found}"
+        elif p_found != period:
+            message = f"the orbit crosses the section {p_found} times per period, not {period}"
+            period = p_found
+    converged = status == "converged"
+    return Orbit(
+        system=system, period=period, points=points, times=times, T=float(T),
+        multipliers=mult, stable=bool(converged and np.all(np.abs(mult) < 1.0)),
+        jacobian=product(factors), residual=float(res), iterations=total_it,
+        converged=converged, status=status, message=message, history=history,
+    )  # fmt: skip

@@ -1,0 +1,82 @@
+"""The :class:`Orbit` record of :func:`~stickslip_fast.orbits.find_orbit`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..model.system import System
+
+#: Outcomes of :func:`find_orbit` (``Orbit.status``).
+ORBIT_STATUSES = (
+    "converged",  # residual <= tol: a fixed point of P^p
+    "max-iter",  # max_iter Newton steps without reaching tol
+    "no-progress",  # the damped step could not reduce the residual
+    "lower-period",  # converged, but the points repeat with a divisor of the period asked for
+    "equilibrium",  # converged onto a rest point (|f| ~ 0 there), not an orbit
+    "integration-failed",  # the return map could not be evaluated at the start
+)
+
+
+@dataclass
+class Orbit:
+    """A periodic orbit found by :func:`find_orbit`.
+
+    Attributes
+    ----------
+    system : System
+    period : int
+        p: the number of section crossings per period.
+    points : ndarray, shape (p, n_state)
+        The states at the p crossings of the section (dx1 = 0 upward, the local
+        minima of x1), in time order, starting at the one with the smallest x1.
+    times : ndarray, shape (p,)
+        Time from ``points[0]`` to each following crossing; ``times[-1]`` is T.
+    T : float
+        The period in time (NaN when the map could not be evaluated).
+    multipliers : ndarray of complex, shape (n_state - 1,)
+        Nontrivial Floquet multipliers: the eigenvalues of the return map's
+        Jacobian in section coordinates, largest modulus first.
+    stable : bool
+        Converged and every multiplier inside the unit circle.
+    jacobian : ndarray, shape (n_state - 1, n_state - 1)
+        D P^p at ``points[0]`` in section coordinates (the state without dx1).
+    residual : float
+        ``max |P^p(z) - z|`` over the section coordinates at ``points[0]``.
+    iterations : int
+        Newton steps taken.
+    converged : bool
+        ``status == "converged"``.
+    status : str
+        One of :data:`ORBIT_STATUSES`.
+    message : str
+        What happened, in words (why it failed, for a failure).
+    """
+
+    system: System
+    period: int
+    points: np.ndarray
+    times: np.ndarray
+    T: float
+    multipliers: np.ndarray
+    stable: bool
+    jacobian: np.ndarray
+    residual: float
+    iterations: int
+    converged: bool
+    status: str
+    message: str = ""
+    history: list[float] = field(default_factory=list, repr=False)
+
+    @property
+    def state_names(self) -> list[str]:
+        """Column names of ``points``."""
+        return self.system.state_names
+
+    def __repr__(self) -> str:
+        mult = ", ".join(f"{m:.4g}" for m in self.multipliers[:3])
+        return (
+            f"Orbit(status={self.status!r}, period={self.period}, T={self.T:.10g}, "
+            f"residual={self.residual:.2e}, multipliers=[{mult}], stable={self.stable})"
+        )

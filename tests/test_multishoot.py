@@ -1,0 +1,79 @@
+"""Multiple shooting (issue 28, item 1): the periodic QR multipliers against analytic
+products, multiple against single shooting where both converge, and multiple shooting
+where single shooting stops. About 10 s warm."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.bifurcation.multishoot import periodic_multipliers
+
+# the stable period-1 orbit of Fig. 6 at eta = 2.0 (find_orbit, residual 2e-16)
+Z_ETA2 = np.array([0.1115544410046177, 0.0, 0.12120838635656168, -0.00787487872112215])
+
+
+def test_periodic_multipliers_resolve_graded_products():
+    # A_i = P_i U_i P_{i-1}^T (P_i permutations, U_i upper triangular with the diagonal
+    # 1e15, -2, 1e-15 and O(1) entries above it; P_{-1} = P_{m-1}), every factor exact
+    # in floating point: the product over 20 factors is similar to U_19 ... U_0, whose
+    # eigenvalues are the products of the diagonals: 1e300, 2^20 and 1e-300.
+    rng = np.random.default_rng(1)
+    k, m = 3, 20
+    perms = [np.eye(k)[rng.permutation(k)] for _ in range(m)]
+    factors = []
+    for i in range(m):
+        U = np.diag([1e15, -2.0, 1e-15]) + np.triu(rng.standard_normal((k, k)), 1)
+        factors.append(perms[i] @ U @ perms[i - 1].T)
+    mu = periodic_multipliers(factors)
+    np.testing.assert_allclose(mu.real[:2], [1e300, 2.0**20], rtol=1e-10)
+    # the smallest: its magnitude (QR of a graded matrix, as with single shooting)
+    np.testing.assert_allclose(mu.real[2], 1e-300, rtol=0.1)
+    np.testing.assert_array_equal(mu.imag, 0.0)
+    # 1e20 per factor: the product (1e400) overflows, the multipliers below it do not
+    factors[0] = factors[0] @ perms[-1] @ np.diag([1e100, 1.0, 1.0]) @ perms[-1].T
+    mu = periodic_multipliers(factors)
+    assert np.isinf(mu[0].real)
+    np.testing.assert_allclose(mu[1].real, 2.0**20, rtol=1e-10)
+
+
+def test_periodic_multipliers_of_rectangular_factors_and_complex_pairs():
+    # n x k, n x n, k x n factors (the section's shape) and a rotation: compare with numpy
+    rng = np.random.default_rng(2)
+    factors = [
+        rng.standard_normal((4, 3)),
+        rng.standard_normal((4, 4)),
+        rng.standard_normal((3, 4)),
+    ]
+    P = factors[2] @ factors[1] @ factors[0]
+    ref = np.linalg.eigvals(P)
+    ref = ref[np.argsort(-np.abs(ref), kind="stable")]
+    np.testing.assert_allclose(periodic_multipliers(factors), ref, rtol=1e-12)
+    th = 0.3
+    R = 1.1 * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    mu = periodic_multipliers([R] * 7)
+    np.testing.assert_allclose(
+        np.sort(mu.imag), [-(1.1**7) * np.sin(7 * th), 1.1**7 * np.sin(7 * th)], rtol=1e-12
+    )
+
+
+@pytest.mark.parametrize("segments", [1, 3, 8])
+def test_multiple_equals_single_shooting(segments):
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    single = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-13)
+    multi = ssf.find_orbit(s, Z_ETA2 + 1e-4, 1, tol=1e-13, shooting="multiple", segments=segments)
+    assert single.converged and multi.converged, (single, multi)
+    np.testing.assert_allclose(multi.points, single.points, rtol=0, atol=1e-9)
+    assert abs(multi.T - single.T) < 1e-9
+    # the leading multiplier: the tangents' accuracy (~1e-9, docs/limits.md)
+    assert abs(multi.multipliers[0] - single.multipliers[0]) < 1e-7
+    np.testing.assert_allclose(np.linalg.eigvals(multi.jacobian).real.min(), -0.0968846, atol=1e-6)
+
+
+def test_bad_shooting_arguments_name_the_field():
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    with pytest.raises(ValueError, match="shooting"):
+        ssf.find_orbit(s, Z_ETA2, 1, shooting="double")
+    with pytest.raises(ValueError, match="segments"):
+        ssf.find_orbit(s, Z_ETA2, 1, shooting="multiple", segments=0)
