@@ -472,6 +472,9 @@ def plot_sweep(
         from stickslip_fast.analysis.census import load_census
 
         res = load_census(path)
+        if not hasattr(res, "param"):  # a census over a plane: maps, not a diagram
+            raise SystemExit(f"{path} is a census over two parameters: draw it with "
+                             "scripts/plot_census_plane.py")  # fmt: skip
         fig = plot_census(res, variables, title=title if title is not None else file_title or None)
         if loaded:
             overlay_branches(fig, loaded, res.param, res.state_names, variables,

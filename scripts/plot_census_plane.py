@@ -7,8 +7,8 @@ the plane, one cell per grid point:
 - **attractors**: the number of attractors found in the cell (from its starts);
 - **steady sliding**: the share of the starts that end in steady sliding (0: stick-slip
   from every start, 1: sliding from every start; in between it depends on the start);
-- **dominant period**: the period of the attractor with the largest basin (0: steady
-  sliding, "?" for unresolved runs).
+- **dominant period**: the period of the attractor with the largest basin (or steady
+  sliding, a stalled motor, "?" for unresolved runs).
 
 Curves (fold or period-doubling curves of a two-parameter continuation) can be laid
 over the panels with ``draw_maps(..., curves=[(values (n, 2), style dict), ...])``.
@@ -46,9 +46,16 @@ def _edges(v: np.ndarray) -> np.ndarray:
     return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
 
 
-def _discrete(ax, x, y, z, ticks, ticklabels, cmap_name, title):
+#: Colours of the dominant-period map, the same in every figure (orbits by period).
+PERIOD_COLOURS = {-3: "tab:gray", -2: "black", -1: "tab:purple", 0: "tab:blue"}
+ORBIT_COLOURS = ["tab:orange", "tab:green", "tab:red", "tab:brown", "tab:pink", "tab:olive"]
+
+
+def _discrete(ax, x, y, z, ticks, ticklabels, cmap_name, title, colours=None):
     """A map of small integers with one colour each and a labelled colour bar."""
-    cmap = ListedColormap(plt.get_cmap(cmap_name)(np.linspace(0.05, 0.95, len(ticks))))
+    if colours is None:
+        colours = plt.get_cmap(cmap_name)(np.linspace(0.05, 0.95, len(ticks)))
+    cmap = ListedColormap(colours)
     norm = BoundaryNorm(np.arange(len(ticks) + 1) - 0.5, len(ticks))
     index = np.searchsorted(ticks, z)
     mesh = ax.pcolormesh(x, y, index.T, cmap=cmap, norm=norm)
@@ -63,17 +70,20 @@ def draw_maps(res, axes=None, curves=()):
         _, axes = plt.subplots(1, 3, figsize=(15.5, 4.4))
     (p1, p2), (v1, v2) = res.params, res.values
     x, y = _edges(v1), _edges(v2)
-    n_att = res.n_attractors()
+    n_att = res.n_attractors(stalls_as_one=True)
+    stalls = any(a.kind == "stalled" for row in res.attractors for c in row for a in c)
     ticks = np.arange(n_att.min(), n_att.max() + 1)
-    _discrete(axes[0], x, y, n_att, ticks, [str(t) for t in ticks], "viridis", "attractors")
+    _discrete(axes[0], x, y, n_att, ticks, [str(t) for t in ticks], "viridis",
+              "attractors" + (" (stalled states counted once)" if stalls else ""))  # fmt: skip
     mesh = axes[1].pcolormesh(x, y, res.sliding_fraction().T, cmap="coolwarm", vmin=0, vmax=1)
     plt.colorbar(mesh, ax=axes[1], label="share of the starts")
     axes[1].set_title("basin fraction of steady sliding", fontsize=10)
     dom = res.dominant_period()
     ticks = np.unique(dom)
-    names = {0: "sliding", -1: "?", -2: "failed"}
-    _discrete(axes[2], x, y, dom, ticks, [names.get(int(t), f"P{t}") for t in ticks], "tab10",
-              "period of the largest basin")  # fmt: skip
+    names = {0: "sliding", -1: "?", -2: "failed", -3: "stalled"}
+    colours = [PERIOD_COLOURS.get(int(t), ORBIT_COLOURS[(int(t) - 1) % 6]) for t in ticks]
+    _discrete(axes[2], x, y, dom, ticks, [names.get(int(t), f"P{t}") for t in ticks], None,
+              "period of the largest basin", colours)  # fmt: skip
     for ax in axes:
         for values, style in curves:
             ax.plot(values[:, 0], values[:, 1], **{"color": "k", "lw": 1.2, **style})

@@ -32,7 +32,7 @@ from .census_classify import (
 __all__ = ["CensusPlaneResult", "PlaneTrack", "classify_plane", "plane_track_columns"]
 
 #: :meth:`CensusPlaneResult.dominant_period` where the largest basin is not a periodic orbit.
-PERIOD_SLIDING, PERIOD_UNRESOLVED, PERIOD_NONE = 0, -1, -2
+PERIOD_SLIDING, PERIOD_UNRESOLVED, PERIOD_NONE, PERIOD_STALLED = 0, -1, -2, -3
 
 
 @dataclass
@@ -258,9 +258,20 @@ class CensusPlaneResult:
                     out[i, j, a.id] = a.fraction
         return out
 
-    def n_attractors(self, min_fraction: float = 0.0) -> np.ndarray:
-        """(n1, n2): attractors per cell whose basin fraction is at least ``min_fraction``."""
-        return self._per_cell(lambda atts: sum(a.fraction >= min_fraction for a in atts), int)
+    def n_attractors(self, min_fraction: float = 0.0, stalls_as_one: bool = False) -> np.ndarray:
+        """(n1, n2): attractors per cell whose basin fraction is at least ``min_fraction``.
+
+        With ``stalls_as_one`` the stalled states of a cell count as one (a
+        stalled DC motor holds the disks wherever stiction does: a continuum of
+        states, each start its own, rather than isolated attractors).
+        """
+
+        def count(atts: list[Attractor]) -> int:
+            big = [a for a in atts if a.fraction >= min_fraction]
+            stalls = sum(a.kind == "stalled" for a in big)
+            return len(big) - (stalls - 1 if stalls_as_one and stalls > 1 else 0)
+
+        return self._per_cell(count, int)
 
     def sliding_fraction(self) -> np.ndarray:
         """(n1, n2): share of the starts that end in steady sliding (an equilibrium)."""
@@ -271,19 +282,24 @@ class CensusPlaneResult:
     def dominant_period(self) -> np.ndarray:
         """(n1, n2): the period of the attractor with the largest basin in each cell.
 
-        A periodic orbit gives its period (>= 1); steady sliding or a stalled
-        motor :data:`PERIOD_SLIDING` (0); "unresolved" :data:`PERIOD_UNRESOLVED`
-        (-1); a cell where every run failed :data:`PERIOD_NONE` (-2). Ties go to
-        the attractor reached by the lowest start.
+        A periodic orbit gives its period (>= 1); steady sliding
+        :data:`PERIOD_SLIDING` (0); "unresolved" :data:`PERIOD_UNRESOLVED` (-1);
+        a cell where every run failed :data:`PERIOD_NONE` (-2); a stalled motor
+        :data:`PERIOD_STALLED` (-3; its stalled states together, as one basin).
+        Ties go to the attractor reached by the lowest start.
         """
 
         def dominant(atts: list[Attractor]) -> int:
             if not atts:
                 return PERIOD_NONE
+            stalled = sum(a.fraction for a in atts if a.kind == "stalled")
             a = atts[0]  # most starts first, ties by first start
+            if stalled > a.fraction:
+                return PERIOD_STALLED
             if a.kind == "orbit":
                 return a.period
-            return PERIOD_UNRESOLVED if a.kind == "unresolved" else PERIOD_SLIDING
+            codes = {"unresolved": PERIOD_UNRESOLVED, "stalled": PERIOD_STALLED}
+            return codes.get(a.kind, PERIOD_SLIDING)
 
         return self._per_cell(dominant, int)
 
