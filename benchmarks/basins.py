@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -31,17 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import stickslip_fast as ssf  # noqa: E402
-
-
-def _cpu_name() -> str:
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
+from benchmarks.common import cpu_model  # noqa: E402
 
 
 def measure(n: int, backend: str, threads: int | None, eta: float, t_end: float) -> dict:
@@ -67,7 +56,7 @@ def measure(n: int, backend: str, threads: int | None, eta: float, t_end: float)
         "steps": steps,
         "projected_200x200_s": 40000 / (n * n / wall),
         "fractions": {str(k): v for k, v in res.fractions().items()},
-        "machine": f"{_cpu_name()}, {os.cpu_count()} cores",
+        "machine": f"{cpu_model()}, {os.cpu_count()} cores",
         "load_average": os.getloadavg()[0],
         "time": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
     }

@@ -328,6 +328,17 @@ def largest_lyapunov(
     >>> abs(res.exponent) < 1e-3  # doctest: +SKIP
     True
     """
+    y_init, u_init, tangent_atol = _lyapunov_inputs(
+        system, t_end, t_transient, y0, rtol, atol, renorm_dt, u0, tangent_atol
+    )
+    return _run_lyapunov(
+        system, y_init, u_init, t_end, t_transient, rtol, atol, tangent_atol, renorm_dt, max_steps
+    )
+
+
+def _lyapunov_inputs(system, t_end, t_transient, y0, rtol, atol, renorm_dt, u0, tangent_atol):
+    """Check :func:`largest_lyapunov`'s arguments; the initial state, tangent vector and
+    ``tangent_atol`` as the kernel takes them."""
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("renorm_dt", renorm_dt)):
@@ -346,10 +357,29 @@ def largest_lyapunov(
         u_init = np.asarray(u0, dtype=float)
         if u_init.shape != (n,) or not np.all(np.isfinite(u_init)) or not np.any(u_init):
             raise ValueError(f"u0 must be a finite nonzero vector of length {n}")
+    return y_init, u_init, tangent_atol
+
+
+def _fit_slope(conv: np.ndarray, t_start: float) -> float:
+    """Least-squares slope of the accumulated log growth against time (NaN below 2 records)."""
+    k = len(conv)
+    if k >= 2:
+        tt = np.concatenate([[t_start], conv[:, 0]])
+        growth = np.concatenate([[0.0], conv[:, 1] * (conv[:, 0] - t_start)])
+        slope = float(np.polyfit(tt, growth, 1)[0])
+    else:
+        slope = math.nan
+    return slope
+
+
+def _run_lyapunov(
+    system, y_init, u_init, t_end, t_transient, rtol, atol, tangent_atol, renorm_dt, max_steps
+) -> LyapunovResult:
+    """Run the compiled kernel on checked inputs and collect its :class:`LyapunovResult`."""
     cap = int((t_end - t_transient) / renorm_dt) + 2
     conv_t = np.empty(cap)
     conv_est = np.empty(cap)
-    y_end = np.empty(n)
+    y_end = np.empty(system.n_state)
     stats = np.zeros(3, dtype=np.int64)
     fstats = np.zeros(4)
     t0 = time.perf_counter()
@@ -365,12 +395,7 @@ def largest_lyapunov(
     k = int(stats[2])
     conv = np.column_stack([conv_t[:k], conv_est[:k]])
     t_start = float(fstats[1])
-    if k >= 2:
-        tt = np.concatenate([[t_start], conv[:, 0]])
-        growth = np.concatenate([[0.0], conv[:, 1] * (conv[:, 0] - t_start)])
-        slope = float(np.polyfit(tt, growth, 1)[0])
-    else:
-        slope = math.nan
+    slope = _fit_slope(conv, t_start)
     return LyapunovResult(
         exponent=float(fstats[0]),
         exponent_fit=slope,

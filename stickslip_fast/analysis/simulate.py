@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..base.docs import fill_doc
 from ..base.interrupt import call_interruptible, new_abort_flag
 from ..core.poincare import MAX_PERIOD, STATUS_NAMES, detect_period
 from ..core.results import SimulationResult
@@ -56,6 +57,53 @@ __all__ = [
 WORKSPACE_VECTORS = 64
 
 
+#: The ``method``, ``rtol``, ``atol`` and ``h`` entries of the docstrings (numpydoc).
+METHOD_PARAMS_DOC = """
+    method : {"rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2"}
+        ``"rodas5p"`` (default): L-stable Rosenbrock-Wanner, order 5(4), for the
+        stiff sticking phases. ``"dopri5"``: adaptive Dormand-Prince 5(4) with PI
+        control. ``"dopri5-fixed"``: Dormand-Prince with the fixed step ``h``.
+        ``"rodas4p"``, ``"rodas4p2"``: 6-stage Rosenbrock-Wanner 4(3) methods;
+        cheaper per step but slower than ``"rodas5p"`` at every accuracy
+        measured (docs/model.md).
+    rtol, atol : float, optional
+        Tolerances of the adaptive methods (defaults 1e-9 and 1e-11; rtol at most 1e-2).
+    h : float, optional
+        Fixed step size. Required by ``"dopri5-fixed"``; with ``"rodas5p"`` it
+        runs the Rosenbrock method with fixed steps (for convergence studies)."""
+
+#: The ``max_steps``, ``equilibrium_tol``, ``period_tol``, ``stop`` and ``dwell`` entries.
+CLASSIFY_PARAMS_DOC = """
+    max_steps : int, optional
+        Give up with status "max-steps" after this many accepted steps.
+    equilibrium_tol : float
+        The run counts as at rest ("equilibrium", or "stalled" when a DC motor's
+        belt is below 1% of v_b0) when, over its last ``dwell`` time units (or
+        the whole recording window if that is shorter), no disk velocity
+        exceeds this and the belt speed varies by less. A run at rest at its
+        end for less than that is "unsettled" (never an orbit: its crossings
+        would be round-off minima of x1 at rest). Motion that died out earlier
+        never counts. Default 1e-4, ten times the presets' eps: inside the
+        friction law's stick band a "stuck" disk creeps at O(eps).
+    period_tol : float, optional
+        Relative tolerance of the period detector (default 1e4 rtol).
+    stop : {"fixed", "converged"}
+        ``"fixed"`` (default): run to ``t_end`` and record after ``t_transient``.
+        ``"converged"``: watch the run from t = 0 (``t_transient`` is not used)
+        and end it once it has converged: the Poincare points repeat with a
+        period p <= 64 to ``period_tol`` over at least 3 periods and 8 points,
+        or the disks have been at rest (speeds, and the belt-speed range, below
+        ``equilibrium_tol``) for ``dwell``. An orbit then records max(8, 4 p)
+        more points (at most ``max_points``), which are the ones returned.
+        ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
+    dwell : float, optional
+        Time at rest at the end of the run that makes it an equilibrium (see
+        ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
+        after which the run ends (default 200, about 15 periods of the slowest
+        free oscillation)."""
+
+
+@fill_doc(method_params=METHOD_PARAMS_DOC, classify_params=CLASSIFY_PARAMS_DOC)
 def simulate(
     system: System,
     t_end: float,
@@ -89,50 +137,13 @@ def simulate(
     y0 : array_like, optional
         Initial state in ``system.state_names`` order; default zeros
         (v_b(0) = 0 for the DC motor, as in the paper).
-    method : {"rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2"}
-        ``"rodas5p"`` (default): L-stable Rosenbrock-Wanner, order 5(4), for the
-        stiff sticking phases. ``"dopri5"``: adaptive Dormand-Prince 5(4) with PI
-        control. ``"dopri5-fixed"``: Dormand-Prince with the fixed step ``h``.
-        ``"rodas4p"``, ``"rodas4p2"``: 6-stage Rosenbrock-Wanner 4(3) methods;
-        cheaper per step but slower than ``"rodas5p"`` at every accuracy
-        measured (docs/model.md).
-    rtol, atol : float, optional
-        Tolerances of the adaptive methods (defaults 1e-9 and 1e-11; rtol at most 1e-2).
-    h : float, optional
-        Fixed step size. Required by ``"dopri5-fixed"``; with ``"rodas5p"`` it
-        runs the Rosenbrock method with fixed steps (for convergence studies).
+    {method_params}
     max_points : int
         Keep at most this many points: the most recent ones. 0 records none
         (only the status and final state; the period is then 0, undetected).
     sample_dt : float, optional
         Also return ``t`` and ``y`` on a uniform grid t_transient + k sample_dt.
-    max_steps : int, optional
-        Give up with status "max-steps" after this many accepted steps.
-    equilibrium_tol : float
-        The run counts as at rest ("equilibrium", or "stalled" when a DC motor's
-        belt is below 1% of v_b0) when, over its last ``dwell`` time units (or
-        the whole recording window if that is shorter), no disk velocity
-        exceeds this and the belt speed varies by less. A run at rest at its
-        end for less than that is "unsettled" (never an orbit: its crossings
-        would be round-off minima of x1 at rest). Motion that died out earlier
-        never counts. Default 1e-4, ten times the presets' eps: inside the
-        friction law's stick band a "stuck" disk creeps at O(eps).
-    period_tol : float, optional
-        Relative tolerance of the period detector (default 1e4 rtol).
-    stop : {"fixed", "converged"}
-        ``"fixed"`` (default): run to ``t_end`` and record after ``t_transient``.
-        ``"converged"``: watch the run from t = 0 (``t_transient`` is not used)
-        and end it once it has converged: the Poincare points repeat with a
-        period p <= 64 to ``period_tol`` over at least 3 periods and 8 points,
-        or the disks have been at rest (speeds, and the belt-speed range, below
-        ``equilibrium_tol``) for ``dwell``. An orbit then records max(8, 4 p)
-        more points (at most ``max_points``), which are the ones returned.
-        ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
-    dwell : float, optional
-        Time at rest at the end of the run that makes it an equilibrium (see
-        ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
-        after which the run ends (default 200, about 15 periods of the slowest
-        free oscillation).
+    {classify_params}
 
     Returns
     -------

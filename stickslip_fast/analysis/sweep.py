@@ -457,6 +457,24 @@ def sweep(
         # resolved before any file is touched: a missing extra or a bad address fails first
         runner = run_local if backend == "local" else _dask_runner(scheduler, n_workers)
 
+    data = _run_units(plan, runner, system, settings, out, title, notes, chunk_size, threads,
+                      progress)  # fmt: skip
+    result = SweepResult(
+        param=plan.names[0] if len(plan.names) == 1 else plan.names,
+        values=plan.axes[0] if len(plan.axes) == 1 else plan.axes,
+        mode=mode,
+        state_names=system.state_names,
+        system=system,
+        settings=settings,
+        path=Path(out) if out is not None else None,
+        _data=data,
+    )
+    warn_no_orbit(result, plan.names, plan.axes, mode == "continuation-both")
+    return result
+
+
+def _run_units(plan, runner, system, settings, out, title, notes, chunk_size, threads, progress):
+    """Run and store the units not done yet; the in-memory results (``{}`` with a file)."""
     with contextlib.ExitStack() as stack:
         nthreads = stack.enter_context(_numba_threads(threads))
         if chunk_size is None:
@@ -478,16 +496,4 @@ def sweep(
             n_written = write_unit(unit, res, store.write)
             if bar is not None:
                 bar.update(n_written)
-
-    result = SweepResult(
-        param=plan.names[0] if len(plan.names) == 1 else plan.names,
-        values=plan.axes[0] if len(plan.axes) == 1 else plan.axes,
-        mode=mode,
-        state_names=system.state_names,
-        system=system,
-        settings=settings,
-        path=Path(out) if out is not None else None,
-        _data=store.data if out is None else {},
-    )
-    warn_no_orbit(result, plan.names, plan.axes, mode == "continuation-both")
-    return result
+    return store.data if out is None else {}

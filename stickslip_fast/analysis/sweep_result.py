@@ -68,19 +68,8 @@ class SweepResult:
                 raise AttributeError(exc.args[0]) from None
         return self._data[name]
 
-    points = property(lambda self: self._get("points"))
-    t_points = property(lambda self: self._get("t_points"))
-    final_state = property(lambda self: self._get("final_state"))
-    count = property(lambda self: self._get("count"))
-    period = property(lambda self: self._get("period"))
-    n_steps = property(lambda self: self._get("n_steps"))
-    n_rejected = property(lambda self: self._get("n_rejected"))
-    n_crossings = property(lambda self: self._get("n_crossings"))
-    status_code = property(lambda self: self._get("status"))
-    sync_error = property(lambda self: self._get("sync_error"))
-    lyapunov = property(lambda self: self._get("lyapunov"))
-    lyapunov_fit = property(lambda self: self._get("lyapunov_fit"))
-    t_converged = property(lambda self: self._get("t_converged"))
+    # the per-value arrays (``points``, ``count``, ... ``status_code``) are properties added
+    # below the class from _LAZY_FIELDS: read from memory or, lazily, from the file
 
     @property
     def status(self) -> np.ndarray:
@@ -147,3 +136,16 @@ def load_sweep(path: str | Path) -> SweepResult:
         path=Path(path),
         _data={**{k: data[k] for k in _DATA_FIELDS}, **data["analyses"]},
     )
+
+
+#: Attribute -> dataset of the per-value arrays a SweepResult reads lazily.
+_LAZY_FIELDS = {
+    name: name
+    for name in (
+        "points t_points final_state count period n_steps n_rejected n_crossings sync_error "
+        "lyapunov lyapunov_fit t_converged"
+    ).split()
+} | {"status_code": "status"}
+for _attr, _name in _LAZY_FIELDS.items():
+    setattr(SweepResult, _attr, property(lambda self, _n=_name: self._get(_n)))
+del _attr, _name

@@ -167,6 +167,29 @@ def phases_from_events(
     else:
         mean = np.full(n_oscillators, np.nan)
         spread = np.full(n_oscillators, np.nan)
+    labels, classification = _lock_labels(mean, spread, tol)
+    if tt.size:
+        order = float(np.mean(np.abs(np.mean(np.exp(1j * theta), axis=0))))
+    else:
+        order = math.nan
+    return SyncResult(
+        events=events,
+        t=tt,
+        theta=theta,
+        t_ref=t_ref,
+        phase_diff=diff,
+        mean_diff=mean,
+        spread=spread,
+        labels=labels,
+        classification=classification,
+        order_parameter=order,
+    )
+
+
+def _lock_labels(mean: np.ndarray, spread: np.ndarray, tol: float) -> tuple[list[str], str]:
+    """Each oscillator's locking to the first (from its mean phase difference and spread), and
+    the classification of the whole."""
+    n_oscillators = len(mean)
     labels = ["reference"]
     for i in range(1, n_oscillators):
         if not (spread[i] < tol):
@@ -184,22 +207,7 @@ def phases_from_events(
         classification = labels[1]
     else:
         classification = "mixed"
-    if tt.size:
-        order = float(np.mean(np.abs(np.mean(np.exp(1j * theta), axis=0))))
-    else:
-        order = math.nan
-    return SyncResult(
-        events=events,
-        t=tt,
-        theta=theta,
-        t_ref=t_ref,
-        phase_diff=diff,
-        mean_diff=mean,
-        spread=spread,
-        labels=labels,
-        classification=classification,
-        order_parameter=order,
-    )
+    return labels, classification
 
 
 def sync_error(points: np.ndarray, n_oscillators: int) -> float:

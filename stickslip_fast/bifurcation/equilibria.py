@@ -106,6 +106,34 @@ def _belt_speed(system: System, which: str) -> float:
     return roots[0] if roots and roots[0] < 0.01 * system.vb0 else system.eps
 
 
+def _damped_newton(system: System, y: np.ndarray, tol: float, max_iter: int):
+    """Newton on f(y) = 0, each step halved until ``max |f|`` decreases; (y, residual, steps)."""
+    p = system.to_array()
+    nosc, dc = system.n_oscillators, system.is_dc_motor
+    f = _field(system, y)
+    res = float(np.max(np.abs(f)))
+    it = 0
+    while res > tol and it < max_iter:
+        jac = dense_jacobian(y, p, nosc, dc)
+        try:
+            dy = np.linalg.solve(jac, -f)
+        except np.linalg.LinAlgError:
+            break
+        it += 1
+        lam = 1.0
+        for _ in range(30):
+            y_new = y + lam * dy
+            f_new = _field(system, y_new)
+            r_new = float(np.max(np.abs(f_new)))
+            if np.isfinite(r_new) and r_new < res:
+                break
+            lam *= 0.5
+        else:
+            break
+        y, f, res = y_new, f_new, r_new
+    return y, res, it
+
+
 def find_equilibrium(
     system: System,
     start: Any = "sliding",
@@ -154,27 +182,7 @@ def find_equilibrium(
         raise ValueError(f"tol must be a finite number > 0, got {plain(tol)}")
     p = system.to_array()
     nosc, dc = system.n_oscillators, system.is_dc_motor
-    f = _field(system, y)
-    res = float(np.max(np.abs(f)))
-    it = 0
-    while res > tol and it < max_iter:
-        jac = dense_jacobian(y, p, nosc, dc)
-        try:
-            dy = np.linalg.solve(jac, -f)
-        except np.linalg.LinAlgError:
-            break
-        it += 1
-        lam = 1.0
-        for _ in range(30):
-            y_new = y + lam * dy
-            f_new = _field(system, y_new)
-            r_new = float(np.max(np.abs(f_new)))
-            if np.isfinite(r_new) and r_new < res:
-                break
-            lam *= 0.5
-        else:
-            break
-        y, f, res = y_new, f_new, r_new
+    y, res, it = _damped_newton(system, y, tol, max_iter)
     converged = res <= tol
     ev = np.linalg.eigvals(dense_jacobian(y, p, nosc, dc)).astype(complex)
     ev = ev[np.argsort(-ev.real, kind="stable")]

@@ -70,6 +70,28 @@ def continue_equilibrium(
     system0 = equilibrium.system
     lam0, lo, hi = _check_args(system0, "equilibrium", param, bounds, ds, ds_min, ds_max, tol,
                                max_points)  # fmt: skip
+    evaluate = _equilibrium_residual(system0, param, fd_step)
+    x0 = np.r_[equilibrium.state, lam0]
+    xs, eigs, bifs, status = pseudo_arclength(
+        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
+        max_points=max_points, tol=tol, tests=_equilibrium_tests, spectrum=_eigs_by_real_part,
+    )  # fmt: skip
+    return Branch(
+        system=system0,
+        param=param,
+        period=0,
+        values=xs[:, -1].copy(),
+        points=xs[:, :-1].copy(),
+        T=np.full(len(xs), np.nan),
+        multipliers=eigs,
+        stable=np.all(eigs.real < 0.0, axis=1),
+        bifurcations=[Bifurcation(k, v, i, x[:-1].copy()) for k, v, i, x in bifs],
+        status=status,
+    )
+
+
+def _equilibrium_residual(system0, param: str, fd_step: float):
+    """The corrector's function x = (y, lambda) -> (ok, f, [df/dy | df/dlambda], df/dy)."""
     nosc, dc = system0.n_oscillators, system0.is_dc_motor
 
     def system_at(lam):
@@ -91,20 +113,4 @@ def continue_equilibrium(
             return False, None, None, None
         return True, G, np.hstack([J, dlam[:, None]]), J
 
-    x0 = np.r_[equilibrium.state, lam0]
-    xs, eigs, bifs, status = pseudo_arclength(
-        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, tests=_equilibrium_tests, spectrum=_eigs_by_real_part,
-    )  # fmt: skip
-    return Branch(
-        system=system0,
-        param=param,
-        period=0,
-        values=xs[:, -1].copy(),
-        points=xs[:, :-1].copy(),
-        T=np.full(len(xs), np.nan),
-        multipliers=eigs,
-        stable=np.all(eigs.real < 0.0, axis=1),
-        bifurcations=[Bifurcation(k, v, i, x[:-1].copy()) for k, v, i, x in bifs],
-        status=status,
-    )
+    return evaluate

@@ -59,25 +59,13 @@ Root attributes: ``schema_version``, ``package_version``, ``kind``, ``config``
 
 # The schema and writers live in the modules of this package: base (bounded
 # opens, digests, disk room, the writer lock), layout (the per-value datasets),
-# sweepfile, readers, trajectory, census. Everything is re-exported here.
-from .base import (  # noqa: F401
-    _NO_ROOM,
+# sweepfile, verify, readers, trajectory, census. The public names are re-exported here.
+from .base import (  # noqa: F401 (the private helpers stay in io.base)
     SWMR_READ_ATTEMPTS,
     ConfigMismatchError,
     DiskFullError,
     ResultFileError,
-    _canonical,
-    _diff_keys,
-    _first_file,
-    _hdf5_set_read_attempts,
-    _is_no_room,
-    _lock_error,
     _make_parent,
-    _os_error,
-    _short,
-    _superblock_eof,
-    _truncation,
-    _WriterLock,
     config_digest,
     disk_full,
     ensure_room,
@@ -110,17 +98,15 @@ from .readers import (  # noqa: F401
 )
 from .sweepfile import (  # noqa: F401
     SweepFile,
-    _data_fields,
     _new_file,
     _rebuild,
-    scan_sweep,
-    stored_config,
 )
 from .trajectory import (  # noqa: F401
     _jsonable,
     read_trajectory,
     write_trajectory,
 )
+from .verify import _data_fields, scan_sweep, stored_config  # noqa: F401
 
 __all__ = [
     "SCHEMA_VERSION",

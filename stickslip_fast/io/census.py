@@ -16,6 +16,7 @@ from .layout import (
     PER_VALUE_FIELDS,
     SCHEMA_VERSION,
     add_point_and_state_scales,
+    create_run_datasets,
     write_root_attrs,
 )
 from .sweepfile import SweepFile
@@ -142,23 +143,14 @@ class CensusFile(SweepFile):
             "-2: not classified yet"
         )
         descriptions["final_state"] = "State at t_end"
-        for name, (shape, dtype, dims, fill) in specs.items():
-            lead = len(gdims) - 1
-            chunks = (1,) * lead + (min(n_s, 256),) + tuple(min(s, 256) for s in shape[lead + 1 :])
+        lead = len(gdims) - 1  # the value axes (one, or two for a plane)
+
+        def chunks_of(name, shape):
             if kp == 0 and name == "points":
-                chunks = None
-            d = h5.create_dataset(
-                name, shape=shape, dtype=dtype, fillvalue=fill, chunks=chunks,
-                compression="gzip" if chunks else None,
-                compression_opts=1 if chunks else None, shuffle=bool(chunks),
-            )  # fmt: skip
-            for i, dim in enumerate(dims):
-                d.dims[i].attach_scale(scales[dim])
-            d.attrs["description"] = descriptions[name]
-        st = h5["status"]
-        st.attrs["flag_values"] = np.arange(len(STATUS_NAMES), dtype="i1")
-        st.attrs["flag_meanings"] = " ".join(STATUS_NAMES)
-        st.attrs["missing_value"] = np.int8(-1)
+                return None
+            return (1,) * lead + (min(n_s, 256),) + tuple(min(s, 256) for s in shape[lead + 1 :])
+
+        create_run_datasets(h5, specs, chunks_of, descriptions, scales, STATUS_NAMES)
 
     def write_pairs(self, flat: np.ndarray, data: dict[str, np.ndarray]) -> None:
         """Write runs at sorted flat (cell, start) indices and flush; ``done`` last.

@@ -39,6 +39,38 @@ def add_point_and_state_scales(h5, max_points: int, state_names, scales: dict) -
     scales["state"] = d
 
 
+def create_run_datasets(
+    h5,
+    specs: dict,
+    chunks_of,
+    descriptions: dict,
+    scales: dict,
+    status_names,
+    fletcher32: bool = False,
+) -> None:
+    """Create the per-run datasets of a sweep or census file, and the ``status`` flag attributes.
+
+    ``specs`` maps a name to ``(shape, dtype, dims, fill)``; ``chunks_of(name, shape)`` gives
+    its chunk shape (None: contiguous, uncompressed). Chunked datasets are gzip-1 with the
+    shuffle filter (and Fletcher-32 checksums where ``fletcher32``).
+    """
+    for name, (shape, dtype, dims, fill) in specs.items():
+        chunks = chunks_of(name, shape)
+        d = h5.create_dataset(
+            name, shape=shape, dtype=dtype, fillvalue=fill, chunks=chunks,
+            compression="gzip" if chunks else None,
+            compression_opts=1 if chunks else None, shuffle=bool(chunks),
+            fletcher32=bool(chunks) and fletcher32,
+        )  # fmt: skip
+        for i, dim in enumerate(dims):
+            d.dims[i].attach_scale(scales[dim])
+        d.attrs["description"] = descriptions[name]
+    st = h5["status"]
+    st.attrs["flag_values"] = np.arange(len(status_names), dtype="i1")
+    st.attrs["flag_meanings"] = " ".join(status_names)
+    st.attrs["missing_value"] = np.int8(-1)
+
+
 #: Per-value integer datasets and their dtypes.
 PER_VALUE_FIELDS = {
     "count": "i4",

@@ -11,7 +11,7 @@ import numpy as np
 from ..base.messages import plain
 from .base import ResultFileError, _short, open_h5
 from .layout import ANALYSIS_FIELDS, PER_VALUE_FIELDS, SCHEMA_VERSION
-from .sweepfile import scan_sweep, stored_config
+from .verify import scan_sweep, stored_config
 
 
 def read_dataset(path: str | Path, name: str) -> np.ndarray:

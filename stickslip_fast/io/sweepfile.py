@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
@@ -30,13 +29,13 @@ from .base import (
 )
 from .layout import (
     _DESCRIPTIONS,
-    ANALYSES,
-    PER_VALUE_FIELDS,
     SCHEMA_VERSION,
     SweepLayout,
     add_point_and_state_scales,
+    create_run_datasets,
     write_root_attrs,
 )
+from .verify import _data_fields, scan_sweep, stored_config  # noqa: F401 (re-exported)
 
 
 class SweepFile:
@@ -201,23 +200,16 @@ class SweepFile:
         kp = layout.max_points
         # chunk along the value axes so appending a sweep chunk touches few HDF5 chunks
         vchunk = tuple(min(s, 64) for s in grid)
-        for name, (shape, dtype, dims, fill) in layout.dataset_specs().items():
-            chunks = vchunk + tuple(min(s, 256) for s in shape[len(grid) :])
+
+        def chunks_of(name, shape):
             if kp == 0 and name in ("points", "t_points"):
-                chunks = None
-            d = h5.create_dataset(
-                name, shape=shape, dtype=dtype, fillvalue=fill, chunks=chunks,
-                compression="gzip" if chunks else None,
-                compression_opts=1 if chunks else None, shuffle=bool(chunks),
-                fletcher32=bool(chunks),
-            )  # fmt: skip
-            for i, dim in enumerate(dims):
-                d.dims[i].attach_scale(scales[dim])
-            d.attrs["description"] = _DESCRIPTIONS[name]
-        st = h5["status"]
-        st.attrs["flag_values"] = np.arange(len(STATUS_NAMES), dtype="i1")
-        st.attrs["flag_meanings"] = " ".join(STATUS_NAMES)
-        st.attrs["missing_value"] = np.int8(-1)
+                return None
+            return vchunk + tuple(min(s, 256) for s in shape[len(grid) :])
+
+        create_run_datasets(
+            h5, layout.dataset_specs(), chunks_of, _DESCRIPTIONS, scales, STATUS_NAMES,
+            fletcher32=True,
+        )  # fmt: skip
 
     # ----------------------------------------------------------------- access
     def done_mask(self) -> np.ndarray:
@@ -287,127 +279,6 @@ class SweepFile:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-def _data_fields(layout: SweepLayout) -> tuple[str, ...]:
-    return (*layout.result_fields, "done")
-
-
-def scan_sweep(
-    h5: h5py.File, layout: SweepLayout | None = None, config: dict | None = None
-) -> tuple[list[str], np.ndarray]:
-    """Verify a sweep file by reading every chunk of every per-value dataset.
-
-    Reading checks each chunk's Fletcher-32 checksum and its compression; the
-    swept values are checked against their SHA-256 in the stored configuration.
-
-    Parameters
-    ----------
-    h5 : h5py.File
-        An open sweep file.
-    layout : SweepLayout, optional
-        The expected layout (default: taken from the file).
-    config : dict, optional
-        The expected configuration (default: the file's own, after checking it
-        against the stored ``config_sha256``).
-
-    Returns
-    -------
-    problems : list of str
-        What is wrong, one phrase each (empty for a sound file).
-    bad : ndarray of bool, grid shape
-        Values with at least one unreadable piece.
-    """
-    problems: list[str] = []
-    if config is None:
-        cfg = stored_config(h5)
-    else:
-        cfg = json.loads(config_digest(config)[0])
-        try:
-            stored_config(h5)
-        except ResultFileError as exc:
-            problems.append(str(exc).split(": ", 1)[-1])
-    params = [cfg["param"]] if isinstance(cfg["param"], str) else list(cfg["param"])  # census: str
-    value_digests = cfg.get("values_sha256", ())
-    if isinstance(value_digests, str):
-        value_digests = [value_digests]
-    if layout is None:
-        fields = ("points", "t_points", "final_state", "done", *PER_VALUE_FIELDS)
-        fields += tuple(f for a in cfg.get("analyses", ()) for f in ANALYSES[a])
-        if "t_converged" in h5:
-            fields += ("t_converged",)
-        grid = (2,) if cfg["mode"] == "continuation-both" else ()
-        grid += tuple(int(n) for n in cfg["n_values"])
-    else:
-        fields = _data_fields(layout)
-        grid = layout.grid_shape
-    for name, want in zip(params, value_digests):
-        try:
-            got = hashlib.sha256(np.ascontiguousarray(h5[name][...], dtype="<f8").tobytes())
-            if got.hexdigest() != want:
-                problems.append(
-                    f"the stored values of {name!r} do not match their SHA-256 in the "
-                    "configuration (corrupted coordinate)"
-                )
-        except (OSError, RuntimeError, KeyError, ValueError) as exc:
-            problems.append(f"the values of {name!r} cannot be read ({_short(exc)})")
-    bad = np.zeros(grid, dtype=bool)
-    g = len(grid)
-    unreadable: list[str] = []
-    first = ""
-    for name in fields:
-        try:
-            ds = h5[name]
-            if ds.shape[:g] != grid:
-                raise ValueError(f"shape {ds.shape} does not match the grid {grid}")
-            chunks = list(ds.iter_chunks()) if ds.chunks else [(slice(None),) * ds.ndim]
-        except (OSError, RuntimeError, KeyError, ValueError) as exc:
-            problems.append(f"dataset {name!r} cannot be read ({_short(exc)})")
-            bad[...] = True
-            continue
-        n_bad = 0
-        for sel in chunks:
-            try:
-                ds[sel]
-            except (OSError, RuntimeError, ValueError) as exc:
-                bad[sel[:g]] = True
-                n_bad += 1
-                first = first or _short(exc)
-        if n_bad:
-            unreadable.append(f"{name} ({n_bad} of {len(chunks)})")
-    if unreadable:
-        problems.append(
-            f"unreadable chunks (checksum or decompression failed: {first}) in "
-            + ", ".join(unreadable)
-        )
-    return problems, bad
-
-
-def stored_config(h5: h5py.File) -> dict:
-    """The configuration stored in a result file, checked against its SHA-256.
-
-    Raises
-    ------
-    ResultFileError
-        If the attribute is missing, is not JSON, or does not match
-        ``config_sha256``.
-    """
-    name = h5.filename
-    try:
-        text = h5.attrs["config"]
-        want = h5.attrs.get("config_sha256")
-    except (OSError, RuntimeError, KeyError) as exc:
-        raise ResultFileError(f"{name}: the configuration cannot be read ({_short(exc)})") from None
-    if isinstance(text, bytes):
-        text = text.decode("utf-8", "replace")
-    if want is not None and hashlib.sha256(str(text).encode()).hexdigest() != want:
-        raise ResultFileError(
-            f"{name}: the stored configuration does not match its SHA-256 (corrupted attribute)"
-        )
-    try:
-        return json.loads(text)
-    except (TypeError, ValueError):
-        raise ResultFileError(f"{name}: the stored configuration is not valid JSON") from None
 
 
 def _new_file(

@@ -53,12 +53,27 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
     Path
         The written file.
     """
-    from ..base.version import package_version
-
     path = Path(path)
-    system = result.system
+    cfg, title, notes = _trajectory_config(result, config)
+    text, digest = config_digest(_jsonable(cfg))
+    _make_parent(path)
+    tmp = path.with_name(path.name + ".partial")
+    try:
+        with h5py.File(tmp, "w", libver="latest") as h5:
+            _write_trajectory_file(h5, result, text, digest, title, notes)
+        tmp.replace(path)
+    except BaseException as exc:
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and not exc.filename:
+            raise _os_error(path, exc) from None
+        raise
+    return path
+
+
+def _trajectory_config(result: Any, config: Any) -> tuple[dict[str, Any], str, str]:
+    """The configuration mapping a trajectory file stores, with its title and notes."""
     cfg: dict[str, Any] = {
-        "system": system.to_dict(),
+        "system": result.system.to_dict(),
         "settings": result.settings.to_dict(),
         "method": result.method,
     }
@@ -76,64 +91,58 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
         raise TypeError(f"config must be a RunConfig or a dict, got {type(config).__name__}")
     if result.t is not None and len(result.t) > 1:
         cfg.setdefault("sample_dt", float(result.t[1] - result.t[0]))
-    text, digest = config_digest(_jsonable(cfg))
+    return cfg, title, notes
+
+
+def _write_trajectory_file(h5: h5py.File, result: Any, text, digest, title, notes) -> None:
+    """Write the root attributes, the coordinates and the datasets of one trajectory."""
+    from ..base.version import package_version
+
+    system = result.system
     n_state = len(result.state_names)
     t = np.zeros(0) if result.t is None else np.asarray(result.t, dtype="f8")
     y = np.zeros((0, n_state)) if result.y is None else np.asarray(result.y, dtype="f8")
     tp = np.asarray(result.t_poincare, dtype="f8")
     pts = np.asarray(result.poincare, dtype="f8").reshape(len(tp), n_state)
+    a = h5.attrs
+    write_root_attrs(a, text, digest, title, notes, package_version(), kind="trajectory")
+    a["status"] = result.status
+    a["period"] = int(result.period)
+    a["method"] = result.method
+    for key in ("n_steps", "n_rejected", "n_crossings"):
+        a[key] = int(getattr(result, key))
+    a["t_final"] = float(result.t_final)
+    a["amplitude"] = float(result.amplitude)
+    a["rest_time"] = float(result.rest_time)
+    for key, value in system.to_dict().items():
+        a[f"system.{key}"] = value
 
-    _make_parent(path)
-    tmp = path.with_name(path.name + ".partial")
-    try:
-        with h5py.File(tmp, "w", libver="latest") as h5:
-            a = h5.attrs
-            write_root_attrs(a, text, digest, title, notes, package_version(), kind="trajectory")
-            a["status"] = result.status
-            a["period"] = int(result.period)
-            a["method"] = result.method
-            for key in ("n_steps", "n_rejected", "n_crossings"):
-                a[key] = int(getattr(result, key))
-            a["t_final"] = float(result.t_final)
-            a["amplitude"] = float(result.amplitude)
-            a["rest_time"] = float(result.rest_time)
-            for key, value in system.to_dict().items():
-                a[f"system.{key}"] = value
+    def scale(name: str, data: np.ndarray, long_name: str, **kw: Any) -> h5py.Dataset:
+        d = h5.create_dataset(name, data=data, **kw)
+        d.make_scale(name)
+        d.attrs["long_name"] = long_name
+        return d
 
-            def scale(name: str, data: np.ndarray, long_name: str, **kw: Any) -> h5py.Dataset:
-                d = h5.create_dataset(name, data=data, **kw)
-                d.make_scale(name)
-                d.attrs["long_name"] = long_name
-                return d
-
-            st = scale("state", np.array(result.state_names, dtype=object), "state variable",
-                       dtype=h5py.string_dtype())  # fmt: skip
-            ts = scale("t", t, "time (nondimensional)", maxshape=(None,))
-            cs = scale("crossing", np.arange(len(tp), dtype="i4"),
-                       "index of the Poincare point, in time order", maxshape=(None,))  # fmt: skip
-            specs = {
-                "y": (y, (ts, st), "State sampled every sample_dt from t_transient"),
-                "t_poincare": (tp, (cs,), "Times of the Poincare points (local minima of x1)"),
-                "poincare": (pts, (cs, st), "Full state at each Poincare point"),
-                "final_state": (np.asarray(result.final_state, dtype="f8"), (st,),
-                                "State at t_end"),
-            }  # fmt: skip
-            for name, (data, dims, desc) in specs.items():
-                d = h5.create_dataset(
-                    name, data=data, maxshape=(None,) * data.ndim,
-                    compression="gzip" if data.size else None,
-                    compression_opts=1 if data.size else None, fletcher32=True,
-                )  # fmt: skip
-                for i, sc in enumerate(dims):
-                    d.dims[i].attach_scale(sc)
-                d.attrs["description"] = desc
-        tmp.replace(path)
-    except BaseException as exc:
-        tmp.unlink(missing_ok=True)
-        if isinstance(exc, OSError) and not exc.filename:
-            raise _os_error(path, exc) from None
-        raise
-    return path
+    st = scale("state", np.array(result.state_names, dtype=object), "state variable",
+               dtype=h5py.string_dtype())  # fmt: skip
+    ts = scale("t", t, "time (nondimensional)", maxshape=(None,))
+    cs = scale("crossing", np.arange(len(tp), dtype="i4"),
+               "index of the Poincare point, in time order", maxshape=(None,))  # fmt: skip
+    specs = {
+        "y": (y, (ts, st), "State sampled every sample_dt from t_transient"),
+        "t_poincare": (tp, (cs,), "Times of the Poincare points (local minima of x1)"),
+        "poincare": (pts, (cs, st), "Full state at each Poincare point"),
+        "final_state": (np.asarray(result.final_state, dtype="f8"), (st,), "State at t_end"),
+    }
+    for name, (data, dims, desc) in specs.items():
+        d = h5.create_dataset(
+            name, data=data, maxshape=(None,) * data.ndim,
+            compression="gzip" if data.size else None,
+            compression_opts=1 if data.size else None, fletcher32=True,
+        )  # fmt: skip
+        for i, sc in enumerate(dims):
+            d.dims[i].attach_scale(sc)
+        d.attrs["description"] = desc
 
 
 def read_trajectory(path: str | Path) -> dict[str, Any]:
