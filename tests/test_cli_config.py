@@ -55,11 +55,29 @@ def _write(tmp_path, text, name="c.toml"):
         ("[sweep]\nparam = 'eta'\nvalues = [1, 2]\nchunk = 3", "chunk"),
         ("[sweep]\nparam = 'eta'\nvalues = [1, 2]\nchunk_size = 0", "chunk_size"),
         ("[system\neta = 2", "invalid TOML"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nshooting = 'double'", "shooting"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nsegments = 0", "segments"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nparam2 = 'eta'\nbounds2 = [0, 1]", "param2"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nparam2 = 'k12'\nbounds2 = [0]", "bounds2"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nbounds2 = [0, 1]", "param2"),
+        (
+            "[continue]\nparam = 'eta'\nbounds = [1, 2]\nparam2 = 'k12'\nbounds2 = [-1, 0]\n"
+            "direction2 = 2",
+            "direction2",
+        ),
     ],
 )
 def test_bad_config_names_the_key(tmp_path, text, match):
     with pytest.raises(ConfigError, match=match):
         load_config(_write(tmp_path, text))
+
+
+def test_continue_table_takes_the_issue_28_keys(tmp_path):
+    text = ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nshooting = 'auto'\nsegments = 12\n"
+            "param2 = 'k12'\nbounds2 = [-0.9, -0.7]\ndirection2 = -1")  # fmt: skip
+    c = load_config(_write(tmp_path, text)).continuation
+    assert (c["shooting"], c["segments"], c["param2"]) == ("auto", 12, "k12")
+    assert c["bounds2"] == (-0.9, -0.7) and c["direction2"] == -1.0
 
 
 def test_paper_order_initial_condition_for_two_disks():

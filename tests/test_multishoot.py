@@ -77,3 +77,26 @@ def test_bad_shooting_arguments_name_the_field():
         ssf.find_orbit(s, Z_ETA2, 1, shooting="double")
     with pytest.raises(ValueError, match="segments"):
         ssf.find_orbit(s, Z_ETA2, 1, shooting="multiple", segments=0)
+
+
+# a point of the unstable side of Fig. 6's period-1 branch past its upper fold
+# (3.3236646195), computed by the multiple-shooting continuation of docs/orbits.md:
+# multiplier 1.13e8, far past where single shooting stops (~2.6e3, docs/limits.md)
+ETA_UNSTABLE = 3.323525498113908
+Z_UNSTABLE = np.array([0.07259589657661687, 0.0, 0.1221705830435874, -0.006666575275298541])
+T_UNSTABLE = 14.043700862197168
+
+
+def test_multiple_shooting_converges_where_single_shooting_stops():
+    s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
+    start = Z_UNSTABLE + np.array([1e-9, 0.0, -1e-9, 1e-9])
+    single = ssf.find_orbit(s, start, 1, max_iter=8)
+    assert not single.converged and single.status in ("no-progress", "max-iter"), single
+    multi = ssf.find_orbit(s, start, 1, shooting="multiple", tol=1e-11, rtol=1e-13, atol=1e-15)
+    assert multi.converged, multi
+    # the continuation's point (corrected to tol 1e-12 there, at the same tolerances)
+    np.testing.assert_allclose(multi.points[0], Z_UNSTABLE, rtol=0, atol=1e-10)
+    assert abs(multi.T - T_UNSTABLE) < 1e-8
+    assert 0.9e8 < abs(multi.multipliers[0]) < 1.4e8 and multi.multipliers[0].real > 1
+    auto = ssf.find_orbit(s, start, 1, shooting="auto", tol=1e-11, rtol=1e-13, atol=1e-15)
+    assert auto.converged and abs(auto.T - multi.T) < 1e-9

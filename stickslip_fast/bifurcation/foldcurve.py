@@ -56,12 +56,15 @@ def _bordered(M, b, c):
     return sol[:n], solT[:n], float(sol[n])
 
 
-def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray, h: float):
-    """The evaluator of F = (G, g) for :func:`pseudo_arclength`, from ``base``.
+def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray, h: float,
+              scale: float = 1.0):  # fmt: skip
+    """The evaluator of F = (G, scale g) for :func:`pseudo_arclength`, from ``base``.
 
     ``base(x)`` -> (ok, G (n_z,), DG (n_z x (n_z + 2)), A) at x = (z, l1, l2): the
     residual, its Jacobian in (z, l1, l2), and the map's Jacobian (whatever the
     spectrum function wants). ``h``: the step of the directional difference along v.
+    ``scale``: 1 / |grad g| at the start, so that the corrector's tolerance on the test
+    function is a distance (near a sharp fold of Fig. 6, |grad g| ~ 1e6).
     """
     shift = CURVE_KINDS[kind]
     eye = np.eye(n_z)
@@ -82,7 +85,7 @@ def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray,
         if not (ok_p and ok_m):
             return False, None, None, None
         grad = -(w @ (DGp - DGm)) * (nv / (2 * h))
-        return True, np.r_[G, g], np.vstack([DG, grad]), A
+        return True, np.r_[G, scale * g], np.vstack([DG, scale * grad]), A
 
     return evaluate
 
@@ -119,7 +122,10 @@ def follow_curve(
     if not ok:
         return None, None, [], "start-failed", x0
     b, c = border(DG[:, :n_z] + CURVE_KINDS[kind] * np.eye(n_z))
-    evaluate = augmented(base, n_z, kind, b, c, h)
+    ok, _, DF, _ = augmented(base, n_z, kind, b, c, h)(x0)
+    if not ok:
+        return None, None, [], "start-failed", x0
+    evaluate = augmented(base, n_z, kind, b, c, h, 1.0 / max(float(np.linalg.norm(DF[-1])), 1e-300))
     e2 = np.zeros_like(x0)
     e2[-1] = 1.0
     okc, x_start, _, _ = _correct(evaluate, x0, e2, x0, tol, 12)

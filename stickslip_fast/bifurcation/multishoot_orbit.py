@@ -8,7 +8,7 @@ import numpy as np
 
 from ..model.system import System
 from .equilibria import EQUILIBRIUM_SPEED
-from .multishoot import MultiShooting, periodic_multipliers
+from .multishoot import MESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh
 from .orbit_record import Orbit
 from .returnmap import SECTION_INDEX, _field, _minimal_period, return_map
 
@@ -112,6 +112,11 @@ def find_orbit_multiple(
                      jacobian=np.full((n - 1, n - 1), np.nan), residual=math.inf,
                      iterations=0, converged=False)  # fmt: skip
     st, Y = initial_segments(ms, z, T) if math.isfinite(T) else ("no-crossings", None)
+    if st == "ok":
+        # bisect the segments that amplify most (past a sharp fold: the capture into stick)
+        mesh = refine_mesh(ms, Y, T, MESH_LIMIT)
+        st, Y = ms.states_at(Y, T, mesh[:-1] * T, mesh=ms.mesh)
+        ms = MultiShooting(system, mesh, rtol, atol, tangent_atol)
     if st != "ok":
         return Orbit(**nan_orbit, status="integration-failed",
                      message=f"no trajectory from the start to cut into segments: {st}")  # fmt: skip

@@ -245,6 +245,33 @@ def continue_orbit(
     return branch
 
 
+def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
+    """Stick phases of every branch point, and their changes located (appended to bifs)."""
+    stick_count = np.full(len(xs), -1, dtype=np.int64)
+    stick_time = np.full(len(xs), np.nan)
+
+    def geometry(x, T_x):
+        d = stick_phases(system_at(x[-1]), full(x), T_x)
+        return d.size, float(d.sum())
+
+    for i, x in enumerate(xs):
+        if math.isfinite(T[i]):
+            try:
+                stick_count[i], stick_time[i] = geometry(x, T[i])
+            except ValueError:  # the orbit could not be sampled: left as not computed
+                pass
+    for i in range(len(xs) - 1):
+        a, b = stick_count[i], stick_count[i + 1]
+        if a >= 0 and b >= 0 and a != b:
+            loc = _locate_change(
+                evaluate, xs[i], xs[i + 1], a,
+                lambda x: geometry(x, periods.get(x.tobytes(), math.nan))[0],
+                tol, 1e-8,
+            )  # fmt: skip
+            bifs.append(("stick-phase", float(loc[-1]), i, loc))
+    return stick_count, stick_time
+
+
 def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> Branch:
     """``branch`` continued by multiple shooting from its last point (shooting="auto")."""
     if branch.values.size < 2 or kw["max_points"] - branch.values.size < 2:
@@ -318,28 +345,8 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
             T[i] = times[-1]
     stick_count = stick_time = None
     if stick_events:
-        stick_count = np.full(len(xs), -1, dtype=np.int64)
-        stick_time = np.full(len(xs), np.nan)
-
-        def geometry(x, T_x):
-            d = stick_phases(system_at(x[-1]), full(x), T_x)
-            return d.size, float(d.sum())
-
-        for i, x in enumerate(xs):
-            if math.isfinite(T[i]):
-                try:
-                    stick_count[i], stick_time[i] = geometry(x, T[i])
-                except ValueError:  # the orbit could not be sampled: left as not computed
-                    pass
-        for i in range(len(xs) - 1):
-            a, b = stick_count[i], stick_count[i + 1]
-            if a >= 0 and b >= 0 and a != b:
-                loc = _locate_change(
-                    evaluate, xs[i], xs[i + 1], a,
-                    lambda x: geometry(x, periods.get(x.tobytes(), math.nan))[0],
-                    tol, 1e-8,
-                )  # fmt: skip
-                bifs.append(("stick-phase", float(loc[-1]), i, loc))
+        stick_count, stick_time = _stick_events(xs, T, system_at, full, evaluate, periods, tol,
+                                                bifs)  # fmt: skip
         bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
     return Branch(
         system=system0,

@@ -190,7 +190,9 @@ def find_orbit(
         where single shooting fails ("no-progress" or "max-iter": its precision
         limit, docs/limits.md).
     segments : int
-        m >= 1, the segments of multiple shooting.
+        m >= 1, the segments of multiple shooting (even cuts in time); those that
+        amplify by more than ``multishoot.MESH_LIMIT`` are then bisected (up to 64
+        segments in all).
 
     Returns
     -------

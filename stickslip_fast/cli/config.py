@@ -52,6 +52,8 @@ Layout (every section optional except what the command needs)::
     # period = 1          # default: the period the simulation finds
     direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
+    # shooting = "single"|"multiple"|"auto", segments   (multiple shooting)
+    # param2, bounds2, direction2   (the folds' and period-doublings' curves in a 2nd parameter)
     # switch = true       # also follow the doubled orbit from each period-doubling found
     # sharp_ends = false  # do not retry with tighter settings where the corrector fails
 
@@ -103,7 +105,8 @@ _SECTIONS = {
     "basins": None,  # keys checked by cli.basins.parse_basins_table
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
-        "max_points", "tol", "switch", "sharp_ends",
+        "max_points", "tol", "switch", "sharp_ends", "shooting", "segments", "param2", "bounds2",
+        "direction2",
     },
 }  # fmt: skip
 
@@ -413,7 +416,39 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
         if out.get("start", "orbit") != "orbit":
             raise ConfigError("[continue].sharp_ends applies to start = 'orbit' only")
         out["sharp_ends"] = v
+    _parse_issue28_keys(table, out)
     return out
+
+
+def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
+    """[continue].shooting / segments (multiple shooting) and param2 / bounds2 / direction2
+    (the two-parameter curves of the branch's folds and period-doublings), into ``out``."""
+    orbit = out.get("start", "orbit") == "orbit"
+    if "shooting" in table:
+        if table["shooting"] not in ("single", "multiple", "auto") or not orbit:
+            raise ConfigError('[continue].shooting must be "single", "multiple" or "auto" '
+                              f"(start = 'orbit' only), got {table['shooting']!r}")  # fmt: skip
+        out["shooting"] = table["shooting"]
+    if "segments" in table:
+        v = table["segments"]
+        if isinstance(v, bool) or not isinstance(v, int) or v < 1 or not orbit:
+            raise ConfigError(f"[continue].segments must be an integer >= 1, got {plain(v)}")
+        out["segments"] = v
+    if "param2" not in table:
+        if "bounds2" in table or "direction2" in table:
+            raise ConfigError("[continue].bounds2 and direction2 need param2")
+        return
+    p2, b2 = table["param2"], table.get("bounds2")
+    if not orbit or not isinstance(p2, str) or p2 not in SWEEPABLE or p2 == out["param"]:
+        raise ConfigError(f"[continue].param2 must be one of {list(SWEEPABLE)} other than param "
+                          f"(start = 'orbit' only), got {p2!r}")  # fmt: skip
+    if not (isinstance(b2, list) and len(b2) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in b2)):  # fmt: skip
+        raise ConfigError(f"[continue].bounds2 must be a list of two numbers, got {b2!r}")
+    d2 = table.get("direction2", 1)
+    if isinstance(d2, bool) or d2 not in (1, -1):
+        raise ConfigError(f"[continue].direction2 must be 1 or -1, got {d2!r}")
+    out["param2"], out["bounds2"], out["direction2"] = p2, (float(b2[0]), float(b2[1])), float(d2)
 
 
 def load_config(path: str | Path) -> RunConfig:

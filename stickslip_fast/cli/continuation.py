@@ -32,6 +32,7 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     start = c.pop("start", "orbit")
     direction = c.pop("direction", 1.0)
     switch = c.pop("switch", False)
+    curve = {k: c.pop(k) for k in ("param2", "bounds2", "direction2") if k in c}
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     if start == "orbit":
         first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
@@ -49,7 +50,34 @@ def _cmd_continue(args: argparse.Namespace) -> int:
         print(branch.summary())
     if switch:
         _switch_and_follow(branch, bounds, c, args, say, switch_branch, continue_orbit)
+    if curve:
+        _curves(branch, curve, c.get("tol", 1e-10), args, say)
     return 0
+
+
+def _curves(branch, curve, tol, args, say):
+    """[continue].param2: every fold and period-doubling of ``branch`` followed in param2,
+    into OUTPUT's stem + ``.curve<k>.h5``."""
+    from ..bifurcation.curve import continue_bifurcation
+
+    out = Path(args.output)
+    bifs = [b for b in branch.bifurcations if b.kind in ("fold", "period-doubling")]
+    if not bifs:
+        say("param2: the branch has no fold or period-doubling")
+    for k, bif in enumerate(bifs, start=1):
+        say(
+            f"following the {bif.kind} at {branch.param} = {bif.value:.10g} in {curve['param2']} ..."
+        )
+        c = continue_bifurcation(branch, bif, curve["param2"], curve["bounds2"],
+                                 direction=curve.get("direction2", 1.0), tol=tol)  # fmt: skip
+        path = out.with_name(f"{out.stem}.curve{k}{out.suffix or '.h5'}")
+        c.to_hdf5(path)
+        if not args.quiet:
+            lo, hi = c.values.min(axis=0), c.values.max(axis=0)
+            print(f"file:      {path}  ({c.kind} curve, {len(c.values)} points, "
+                  f"{c.param} in [{lo[0]:.10g}, {hi[0]:.10g}], {c.param2} in "
+                  f"[{lo[1]:.10g}, {hi[1]:.10g}], ended: {c.status}; codim-2: "
+                  f"{[(p.kind, p.values.tolist()) for p in c.codim2]})")  # fmt: skip
 
 
 def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, continue_orbit):
