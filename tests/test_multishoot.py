@@ -100,3 +100,17 @@ def test_multiple_shooting_converges_where_single_shooting_stops():
     assert 0.9e8 < abs(multi.multipliers[0]) < 1.4e8 and multi.multipliers[0].real > 1
     auto = ssf.find_orbit(s, start, 1, shooting="auto", tol=1e-11, rtol=1e-13, atol=1e-15)
     assert auto.converged and abs(auto.T - multi.T) < 1e-9
+
+
+def test_multiple_shooting_branch_points_are_fixed_points_of_the_return_map():
+    from stickslip_fast.bifurcation.returnmap import return_map
+
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    branch = ssf.continue_orbit(orbit, "eta", (1.9, 2.1), ds=0.01, ds_max=0.02, max_points=4,
+                                shooting="multiple", stick_events=False)  # fmt: skip
+    assert branch.values.size == 4 and branch.values[-1] > 2.0
+    for eta, z, T, mu in zip(branch.values, branch.points, branch.T, branch.multipliers):
+        st, pts, times, jac = return_map(s.replace(eta=float(eta)), z, 1)
+        assert st == "ok" and np.max(np.abs(pts[-1] - z)) < 1e-9 and abs(times[-1] - T) < 1e-9
+        assert abs(mu[0] - np.linalg.eigvals(jac)[np.argmax(np.abs(np.linalg.eigvals(jac)))]) < 1e-6

@@ -113,8 +113,8 @@ def _block_eigs(C: np.ndarray, Rs: list[np.ndarray], b: slice) -> np.ndarray:
             P = P / s
             log_scale += math.log(s)
     ev = np.linalg.eigvals(C[b, b] @ P).astype(complex)
-    if log_scale > 709.0:
-        return ev * np.inf
+    if log_scale > 709.0:  # beyond the floating-point range: their moduli are inf
+        return np.full(ev.shape, complex(np.inf, 0.0))
     return ev * math.exp(log_scale)
 
 
