@@ -97,17 +97,28 @@ def draw_maps(res, axes=None, curves=()):
 def main(argv: list[str] | None = None) -> int:
     from stickslip_fast.analysis.census import load_census
     from stickslip_fast.analysis.census_plane import CensusPlaneResult
+    from stickslip_fast.bifurcation.curve import Curve
 
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("file", metavar="CENSUS.h5")
     p.add_argument("-o", "--output", required=True, metavar="FIG.png")
     p.add_argument("--title", default=None, help="figure title (default: the file's)")
+    p.add_argument("--curve", action="append", default=[], metavar="CURVE.h5",
+                   help="a curve file of continue_bifurcation to lay over the maps (repeatable)")  # fmt: skip
     args = p.parse_args(argv)
     res = load_census(args.file)
     if not isinstance(res, CensusPlaneResult):
         p.error(f"{args.file} is a census over one parameter; use scripts/plot_bifurcation.py")
+    curves = []
+    for path in args.curve:
+        curve = Curve.from_hdf5(path)
+        if (curve.param, curve.param2) != tuple(res.params):
+            p.error(
+                f"{path} is a curve in ({curve.param}, {curve.param2}), the census in {res.params}"
+            )
+        curves.append((curve.values, {"color": "k", "lw": 1.4}))
     fig, axes = plt.subplots(1, 3, figsize=(15.5, 4.4))
-    draw_maps(res, axes)
+    draw_maps(res, axes, curves)
     import h5py
 
     with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
