@@ -401,7 +401,7 @@ def _engine_pieces(p_engine, y, n):
     rhs_e, jb_e = model.rhs, model.jacobian_blocks
     wf, ws = linalg.w_factor, linalg.w_solve
     en_e = None
-    for modname in ("stickslip_fast.core.problems", "stickslip_fast.integrators"):
+    for modname in ("stickslip_fast.core.problems", "stickslip_fast.core.steppers"):
         try:
             en_e = importlib.import_module(modname).error_norm
             break

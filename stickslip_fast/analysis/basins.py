@@ -4,7 +4,7 @@
 (two state coordinates, or two direction vectors through a base state) and
 labels every cell with the attractor it reaches. It *is* a census at one
 parameter value whose starts are the cells (row-major, cell (i, j) is start
-``i * len(g2) + j``): the runs go through :func:`stickslip_fast.census.census`,
+``i * len(g2) + j``): the runs go through :func:`stickslip_fast.analysis.census.census`,
 so they stream to HDF5, resume after a kill, refuse a different configuration
 and are bit-identical across thread counts, chunk sizes and backends (local,
 Dask, CUDA), and the attractor ids are exactly those of a census at that value

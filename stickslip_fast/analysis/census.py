@@ -19,7 +19,7 @@ grouping and tracking (cheap, deterministic) are recomputed from the raw runs
 and stored in the same file (schema in :mod:`stickslip_fast.io`, census
 section, and docs/file-format.md).
 
-Each pair runs through :func:`stickslip_fast.sweep.compute_continuation_chunk`
+Each pair runs through :func:`stickslip_fast.backends.local.compute_continuation_chunk`
 (chains of length one, one per pair), the same pure function the sweeps and the
 Dask backend use, so a census run of (value, start) is bit-identical to
 ``simulate(system.replace(param=value), y0=start, ...)`` with the same settings.

@@ -1,6 +1,6 @@
 """Census classification: attractors from runs, identity up to a cyclic shift, tracks over values.
 
-Used by :func:`stickslip_fast.census.census` and :func:`~stickslip_fast.census.load_census`;
+Used by :func:`stickslip_fast.analysis.census.census` and :func:`~stickslip_fast.analysis.census.load_census`;
 see docs/census.md for the rules.
 """
 

@@ -180,7 +180,7 @@ def lyapunov_kernel(
     recording (t, running estimate) into ``conv_t``/``conv_est``. Outputs:
     ``stats`` = (steps, rejected, records), ``fstats`` = (exponent, t_start,
     t_final, log-growth sum), ``y_end``. ``variant`` selects the kernel as in
-    :func:`~stickslip_fast.variational.propagate_tangents`.
+    :func:`~stickslip_fast.core.variational.propagate_tangents`.
     """
     n = y0.size
     fstats[0] = math.nan

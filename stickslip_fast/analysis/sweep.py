@@ -3,9 +3,9 @@
 :func:`sweep` validates its arguments into a :class:`_Plan` (what to compute),
 opens a store for the results (:class:`~stickslip_fast.io.SweepFile`, or its
 in-memory twin :class:`~stickslip_fast.io.MemoryStore`), cuts the work into
-units (:mod:`stickslip_fast.chunks`), hands them to a backend (local, Dask
+units (:mod:`stickslip_fast.backends.local`), hands them to a backend (local, Dask
 in :mod:`stickslip_fast.backends`, or the GPU in
-:mod:`stickslip_fast.cuda_backend`) and writes each computed unit to the store.
+:mod:`stickslip_fast.backends.cuda`) and writes each computed unit to the store.
 """
 
 from __future__ import annotations
@@ -325,7 +325,7 @@ def _run_analyses(unit: WorkUnit, res: dict, plan: _Plan) -> dict:
 
 
 def _cuda_runner(system: System, settings: Settings, mode: str):
-    """The CUDA runner (:func:`stickslip_fast.cuda_backend.cuda_runner`), imported on demand."""
+    """The CUDA runner (:func:`stickslip_fast.backends.cuda.cuda_runner`), imported on demand."""
     from ..backends.cuda import cuda_runner
 
     return cuda_runner(system, settings, mode)

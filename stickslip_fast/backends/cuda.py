@@ -1,6 +1,6 @@
 """CUDA backend for :func:`stickslip_fast.sweep` and :func:`stickslip_fast.census`.
 
-One GPU thread per trajectory; the kernels are in :mod:`stickslip_fast.cuda_kernels`,
+One GPU thread per trajectory; the kernels are in :mod:`stickslip_fast.backends.cuda_kernels`,
 this module schedules their launches. Imported only when ``backend="cuda"`` is
 asked for (the optional ``[cuda]`` extra, numba-cuda); nothing else in the
 package imports CUDA.
@@ -148,7 +148,7 @@ def compute_restart_chunk_cuda(
     system, names, values: np.ndarray, y0: np.ndarray, settings: dict,
     threads_per_block: int = THREADS_PER_BLOCK, max_registers: int | None = None,
 ) -> dict[str, np.ndarray]:  # fmt: skip
-    """Restart mode on the GPU: the contract of :func:`stickslip_fast.sweep.compute_restart_chunk`.
+    """Restart mode on the GPU: the contract of :func:`stickslip_fast.backends.local.compute_restart_chunk`.
 
     Parameters
     ----------
@@ -159,7 +159,7 @@ def compute_restart_chunk_cuda(
     y0 : ndarray, (n,) or (L, n)
         The initial state, or one per value (a census).
     settings : dict
-        :class:`stickslip_fast.settings.Settings`; method "rodas5p", stop
+        :class:`stickslip_fast.core.settings.Settings`; method "rodas5p", stop
         "fixed" or "converged".
     threads_per_block : int
         CUDA block size; results do not depend on it.

@@ -1,13 +1,13 @@
 """The CUDA kernels of the GPU backend: one thread integrates one trajectory.
 
-Imported only through :mod:`stickslip_fast.cuda_backend` (which schedules the
+Imported only through :mod:`stickslip_fast.backends.cuda` (which schedules the
 launches), and only when ``backend="cuda"`` is asked for: nothing else in the
 package imports CUDA.
 
 What runs on the device
 -----------------------
 One thread integrates one value from its start with Rodas5P (coefficients
-from :data:`stickslip_fast.tableaus.RODAS5P`, frozen into the kernel as
+from :data:`stickslip_fast.core.tableaus.RODAS5P`, frozen into the kernel as
 constant data), the analytic Jacobian and the bordered O(N) linear solve, the
 same PI step-size controller as the CPU kernel, an inline Poincare detector
 (upward zero of dx1 located on the step's dense output by Illinois regula
@@ -18,19 +18,19 @@ time: one kernel is compiled per (N, drive, register cap), for
 
 One source of the equations
 ---------------------------
-The kernel calls :func:`stickslip_fast.model.rhs`,
-:func:`~stickslip_fast.model.jacobian_blocks`, the bordered solve
-:func:`stickslip_fast.linalg.w_factor` / :func:`~stickslip_fast.linalg.w_solve`
-and the helpers of :mod:`stickslip_fast.poincare` (:func:`motion_measure`,
+The kernel calls :func:`stickslip_fast.model.equations.rhs`,
+:func:`~stickslip_fast.model.equations.jacobian_blocks`, the bordered solve
+:func:`stickslip_fast.model.linalg.w_factor` / :func:`~stickslip_fast.model.linalg.w_solve`
+and the helpers of :mod:`stickslip_fast.core.poincare` (:func:`motion_measure`,
 :func:`classify`, :func:`detect_period`, :func:`ring_period`) *as they are*:
 numba-cuda compiles a CPU ``@njit`` function called from a kernel into a
 device function from the same Python source (``CUDATypingContext.resolve_value_type``
 wraps the dispatcher's ``py_func`` in a device ``CUDADispatcher``, recursively
-for the functions it calls, such as :func:`~stickslip_fast.model.friction_partials`).
+for the functions it calls, such as :func:`~stickslip_fast.model.equations.friction_partials`).
 There is no second copy of the model to drift. Only the step loop is written
 here: the CPU's generic driver allocates its workspaces and dispatches through
 CPU-target ``@overload``s, which device code cannot use. It mirrors
-:func:`stickslip_fast.driver.drive` with the Rodas5P stepper, the Poincare
+:func:`stickslip_fast.core.driver.drive` with the Rodas5P stepper, the Poincare
 observer and the stop rules (and the classification of ``trajectory._run``)
 operation for operation; the tests compare the two value by value.
 """
@@ -151,7 +151,7 @@ def get_kernel(n_osc: int, dc: bool, max_registers: int | None = None):
         h_fixed, max_steps, equilibrium_tol, period_tol, max_period, converged,
         dwell, points, t_points, ints, t_conv, final_state)``: one thread per row
         of ``params``, starting from row ``v`` of ``y0`` (or its only row); the
-        outputs have the layout of :func:`stickslip_fast.trajectory.sweep_chunk`.
+        outputs have the layout of :func:`stickslip_fast.core.sweep_kernels.sweep_chunk`.
         ``converged`` selects the converged stop rule (then pass
         ``t_transient = 0``, as the CPU kernel records from t = 0).
     """

@@ -3,8 +3,8 @@
 :func:`dask_runner` returns a runner with the contract of the local one,
 ``run(units, system, names, y0, settings) -> iterator of (unit, result)``: each
 unit (or part of one) becomes a Dask task that calls the pure chunk functions
-:func:`~stickslip_fast.chunks.compute_restart_chunk` /
-:func:`~stickslip_fast.chunks.compute_continuation_chunk` unchanged, and the
+:func:`~stickslip_fast.backends.local.compute_restart_chunk` /
+:func:`~stickslip_fast.backends.local.compute_continuation_chunk` unchanged, and the
 results come back to the client, which alone writes the result file.
 
 * Restart units are independent: a bounded window of them is kept in flight
@@ -454,7 +454,7 @@ def dask_runner(scheduler: str | None = None, n_workers: int | None = None) -> C
     -------
     callable
         ``run(units, system, names, y0, settings)`` -> iterator of
-        ``(unit, result)``, the contract of :func:`stickslip_fast.chunks.run_local`; results
+        ``(unit, result)``, the contract of :func:`stickslip_fast.backends.local.run_local`; results
         arrive in completion order, each unit exactly once. It has the
         attribute ``default_chunk_size`` (values per task when the sweep does
         not set ``chunk_size``) and, after a run, ``workers`` (what each

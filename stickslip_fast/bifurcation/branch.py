@@ -26,7 +26,7 @@ class Bifurcation:
     return map is discontinuous there: the period in time jumps because a crossing of
     dx1 = 0 appears or vanishes; the branch of P^p ends) or "stick-phase" (the number of
     stick phases per period changes: one appears or vanishes, see
-    :func:`~stickslip_fast.orbits.stick_phases`; the point is the first one past the
+    :func:`~stickslip_fast.bifurcation.stickphases.stick_phases`; the point is the first one past the
     change) on orbit branches; "fold" or
     "hopf" (a complex pair of the Jacobian's eigenvalues crosses the imaginary axis) on
     equilibrium branches. ``value``: the parameter;

@@ -4,7 +4,7 @@
 branch (:func:`~stickslip_fast.continue_orbit`) and follows it in a second
 :class:`System` parameter, by the minimally augmented system of :mod:`.foldcurve` on the
 return map (single shooting: the Jacobian and both parameter columns from the variational
-equations and the parameter sensitivities, :func:`~stickslip_fast.orbits.return_map`)."""
+equations and the parameter sensitivities, :func:`~stickslip_fast.bifurcation.returnmap.return_map`)."""
 
 from __future__ import annotations
 

@@ -34,7 +34,7 @@ def continue_equilibrium(
     """Continue an equilibrium (steady sliding, the stalled motor) in one parameter.
 
     Pseudo-arclength continuation of f(y; lambda) = 0 with the analytic
-    Jacobian in y (:func:`stickslip_fast.model.dense_jacobian`) and a central
+    Jacobian in y (:func:`stickslip_fast.model.equations.dense_jacobian`) and a central
     difference in lambda. Along the branch it records the Jacobian's
     eigenvalues and the stability, and locates (to ~1e-9 in the parameter)
     folds (lambda turns back: an eigenvalue through 0) and Hopf points (a

@@ -128,7 +128,7 @@ class MultiShooting:
         m >= 1 (even cuts), or the mesh: m + 1 increasing fractions of the period from
         0 to 1 (segment i runs over [mesh[i] T, mesh[i + 1] T]; :func:`refine_mesh`).
     rtol, atol, tangent_atol : float
-        Integration tolerances (those of :func:`~stickslip_fast.orbits.return_map`).
+        Integration tolerances (those of :func:`~stickslip_fast.bifurcation.returnmap.return_map`).
     param : str, optional
         A parameter whose sensitivity :meth:`evaluate` adds as the Jacobian's last column.
     param_step : float

@@ -24,7 +24,7 @@ def newton_multiple(ms: MultiShooting, u: np.ndarray, tol: float, max_iter: int)
     """Damped Newton on G(u) = 0 (halving the step until max |G| decreases, at most 20 times).
 
     Returns (status, message, u, factors, residual, iterations, history); status as in
-    :data:`~stickslip_fast.orbits.ORBIT_STATUSES`.
+    :data:`~stickslip_fast.bifurcation.orbit_record.ORBIT_STATUSES`.
     """
     st, G, DG, factors = ms.evaluate(u)
     if st != "ok":
@@ -96,7 +96,7 @@ def find_orbit_multiple(
     tangent_atol: float,
     T: float | None = None,
 ):
-    """:func:`~stickslip_fast.orbits.find_orbit` with ``shooting="multiple"`` (its arguments).
+    """:func:`~stickslip_fast.bifurcation.orbits.find_orbit` with ``shooting="multiple"`` (its arguments).
 
     ``T``: the period in time, if known (else from the p-th return of z).
     """

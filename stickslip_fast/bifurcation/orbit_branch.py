@@ -186,10 +186,10 @@ def continue_orbit(
         Relative step of the central difference of the vector field and its
         Jacobian in the parameter, which drives the parameter sensitivity that
         gives dP/dlambda (one-sided at the edge of the parameter's valid range;
-        see :func:`~stickslip_fast.orbits.return_map`).
+        see :func:`~stickslip_fast.bifurcation.returnmap.return_map`).
     stick_events : bool
         Record the stick phases of every point (``Branch.stick_count``,
-        ``stick_time``; :func:`~stickslip_fast.orbits.stick_phases`) and locate
+        ``stick_time``; :func:`~stickslip_fast.bifurcation.stickphases.stick_phases`) and locate
         every change of their number between two points (bisection on the
         branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
     sharp_ends : bool

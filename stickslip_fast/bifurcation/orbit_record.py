@@ -1,4 +1,4 @@
-"""The :class:`Orbit` record of :func:`~stickslip_fast.orbits.find_orbit`."""
+"""The :class:`Orbit` record of :func:`~stickslip_fast.bifurcation.orbits.find_orbit`."""
 
 from __future__ import annotations
 

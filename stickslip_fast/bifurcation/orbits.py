@@ -33,7 +33,7 @@ fixed), dT/dlambda = -e^T s(T) / (e^T f_p) and
 projected at each crossing like the tangents (``return_map(..., param=...)``).
 Continuation uses it as the last column of its Jacobian.
 
-The tangents come from :func:`stickslip_fast.variational.propagate_tangents`
+The tangents come from :func:`stickslip_fast.core.variational.propagate_tangents`
 (the compiled Rodas5P with the exact variational Jacobian, the code the
 Lyapunov exponent uses), integrated with n - 1 tangent vectors, the section's
 coordinate directions.

@@ -1,7 +1,7 @@
 """Command line: ``stickslip-fast simulate | sweep | census | basins | continue | info`` (and ``--version``).
 
 A thin layer over the public API: it parses a TOML config (see
-:mod:`stickslip_fast.config`) and/or flags, calls :func:`simulate` /
+:mod:`stickslip_fast.cli.config`) and/or flags, calls :func:`simulate` /
 :func:`sweep`, and prints or writes the results.
 """
 

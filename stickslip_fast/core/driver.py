@@ -1,7 +1,7 @@
 """The one adaptive driver: step control, observers and stop rules over any problem.
 
-:func:`drive` integrates a problem record (:mod:`stickslip_fast.problems`) with
-a method record (:mod:`stickslip_fast.steppers`) from t = 0 until ``t_end``, a
+:func:`drive` integrates a problem record (:mod:`stickslip_fast.core.problems`) with
+a method record (:mod:`stickslip_fast.core.steppers`) from t = 0 until ``t_end``, a
 stop rule fires, or something fails. After every accepted step it calls an
 *observer*, which records what it needs (Poincare points, samples, renormalised
 tangent vectors) and may modify the new state; then it asks the *stop rule*

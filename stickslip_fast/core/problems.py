@@ -1,7 +1,7 @@
 """Problem records: what the generic steppers integrate.
 
 A problem is a small immutable record (a namedtuple) holding its parameters.
-The steppers of :mod:`stickslip_fast.steppers` call only the generic functions
+The steppers of :mod:`stickslip_fast.core.steppers` call only the generic functions
 below, and Numba dispatches them on the record's *type* (``numba.extending.
 overload``), so one compiled stepper serves every problem and still lands in
 Numba's on-disk cache (passing functions as arguments, or building steppers in
@@ -54,7 +54,7 @@ Records
 
 Adding a problem: define a namedtuple record, a linear workspace, and an
 ``overload`` of each generic function that tests ``instance_class`` (see
-:mod:`stickslip_fast.testproblems` and docs/developing.md).
+:mod:`stickslip_fast.core.testproblems` and docs/developing.md).
 """
 
 from __future__ import annotations

@@ -2,10 +2,10 @@
 
 A *method* is a record of tableau arrays (:data:`RODAS5P_METHOD`,
 :data:`RODAS4P_METHOD`, :data:`RODAS4P2_METHOD`, :data:`DOPRI5_METHOD`; the
-coefficients live in :mod:`stickslip_fast.tableaus`). The Rosenbrock records
+coefficients live in :mod:`stickslip_fast.core.tableaus`). The Rosenbrock records
 all have the same Numba type, so one compiled kernel serves every tableau.
-A *problem* is a record of :mod:`stickslip_fast.problems` (or
-:mod:`stickslip_fast.testproblems`): the steppers call only ``problem_f``,
+A *problem* is a record of :mod:`stickslip_fast.core.problems` (or
+:mod:`stickslip_fast.core.testproblems`): the steppers call only ``problem_f``,
 ``problem_jac``, ``problem_factor`` and ``problem_solve`` on it, which Numba
 dispatches on the record's type. A :class:`StepWorkspace` holds every array a
 step needs; the caller allocates it once (``alloc_workspace``), and
@@ -88,7 +88,7 @@ ExplicitRKMethod = namedtuple("ExplicitRKMethod", ["A", "b", "b_err", "P", "q"])
 
 
 def rosenbrock_method(tableau) -> RosenbrockMethod:
-    """The method record of a :class:`~stickslip_fast.tableaus.RosenbrockTableau`."""
+    """The method record of a :class:`~stickslip_fast.core.tableau_types.RosenbrockTableau`."""
     return RosenbrockMethod(
         float(tableau.gamma), tableau.a, tableau.C, np.ascontiguousarray(tableau.b),
         np.ascontiguousarray(tableau.b_err), tableau.H, tableau.embedded_order + 1.0,

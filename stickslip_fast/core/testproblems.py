@@ -3,7 +3,7 @@
 They check the steppers and the driver apart from the stick-slip model
 (tests/test_steppers.py), and they are the worked example of how to add a
 problem: a namedtuple record, a linear workspace (:class:`DenseLinear`), and one
-``overload`` of each generic function of :mod:`stickslip_fast.problems`.
+``overload`` of each generic function of :mod:`stickslip_fast.core.problems`.
 
 :class:`LinearProblem`
     y' = A y; exact solution expm(A t) y0.

@@ -9,14 +9,14 @@ trajectories in one shared ``prange`` loop. All of them call the same
 :func:`_run`, so a sweep value equals the corresponding simulate() bit for bit.
 
 Kernel rules: nothing here raises (``error_model="numpy"``, no bounds that can
-fail), every loop is bounded (see :mod:`stickslip_fast.driver`), buffers are
+fail), every loop is bounded (see :mod:`stickslip_fast.core.driver`), buffers are
 allocated once per thread lane outside the step loop, and every output slot of
 a value starts as ``ST_NOT_COMPUTED`` so that a value that was never computed
 can never pass for a result.
 
 Every entry point takes ``variant`` (:func:`method_variant`): ``None`` for the
 explicit methods, else :func:`kernel_variant` (for one disk the Rosenbrock runs
-integrate :class:`~stickslip_fast.problems.StickSlipSmall`, the model with its
+integrate :class:`~stickslip_fast.core.problems.StickSlipSmall`, the model with its
 sizes known at compile time). Its type picks the method family at compile time,
 so Numba compiles only the family and the variant a process uses: a first
 ``simulate`` with Rodas5P no longer compiles the Dormand-Prince driver as well
@@ -137,7 +137,7 @@ def run_settings(
 
     ``h_fixed`` > 0 takes fixed steps; ``stop_kind`` is STOP_FIXED or
     STOP_WHEN_CONVERGED (then ``dwell`` is the time at rest that counts as an
-    equilibrium). Validation is :class:`stickslip_fast.settings.Settings`' job.
+    equilibrium). Validation is :class:`stickslip_fast.core.settings.Settings`' job.
     """
     return RunSettings(
         float(t_end), float(t_transient), float(rtol), float(atol), float(h_fixed),
@@ -166,9 +166,9 @@ def _stop_rule(rs, n_osc, dc, n):
 def kernel_variant(n_osc: int, dc: bool) -> tuple:
     """The compile-time token of the trajectory kernels for N disks and a belt kind.
 
-    :func:`~stickslip_fast.problems.small_shape` where a
-    :class:`~stickslip_fast.problems.StickSlipSmall` kernel exists (N <=
-    :data:`~stickslip_fast.problems.SMALL_N_MAX`), else ``()`` (the generic
+    :func:`~stickslip_fast.core.problems.small_shape` where a
+    :class:`~stickslip_fast.core.problems.StickSlipSmall` kernel exists (N <=
+    :data:`~stickslip_fast.core.problems.SMALL_N_MAX`), else ``()`` (the generic
     bordered kernel). Only its type matters. The kernels take it as an argument,
     so Numba compiles only the variants a process uses.
     """

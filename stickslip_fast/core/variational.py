@@ -6,7 +6,7 @@ and the analytic Jacobian; :func:`propagate_sensitivity` also the sensitivity
 s = dy/dlambda to one parameter (s' = J s + df/dlambda). With U(0) = I they
 return the state-transition matrix Phi(t) = dy(t)/dy(0), from which monodromy matrices and the Jacobian of
 the Poincare return map follow. The largest Lyapunov exponent
-(:mod:`stickslip_fast.lyapunov`) runs the same problem on the same driver with
+(:mod:`stickslip_fast.analysis.lyapunov`) runs the same problem on the same driver with
 k = 1 and a renormalising observer.
 """
 
@@ -60,7 +60,7 @@ def propagate_tangents(
     runs to ``t_end``.
 
     ``variant`` is ``trajectory.kernel_variant(n_osc, dc)`` (the
-    :class:`~stickslip_fast.problems.StickSlipTangentSmall` kernel for small N,
+    :class:`~stickslip_fast.core.problems.StickSlipTangentSmall` kernel for small N,
     bit-identical to the generic one and faster) or ``()`` (the generic kernel).
     A token that does not match (n_osc, dc) gives status "error".
 

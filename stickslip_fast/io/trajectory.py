@@ -44,7 +44,7 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
         What :func:`~stickslip_fast.simulate` returned (with ``sample_dt`` for
         the time grid ``t``, ``y``; without it they are stored empty).
     config : RunConfig or dict, optional
-        The run's configuration: a :class:`~stickslip_fast.config.RunConfig`
+        The run's configuration: a :class:`~stickslip_fast.cli.config.RunConfig`
         (its TOML mapping, title, notes, y0 and sample_dt are stored) or any
         JSON-serialisable mapping (stored under ``"user"``).
 

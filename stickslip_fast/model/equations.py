@@ -1,7 +1,7 @@
 """The paper's model: smooth Contensou-Pade friction, right-hand side, analytic Jacobian.
 
 This module is the single source of the equations: the right-hand side, its
-Jacobian and its second derivative. Every problem (:mod:`stickslip_fast.problems`)
+Jacobian and its second derivative. Every problem (:mod:`stickslip_fast.core.problems`)
 and every kernel calls it.
 
 State layout (see :attr:`System.state_names`): disk i occupies slots
@@ -14,7 +14,7 @@ is the last slot. Per disk (paper Eq. 15, nondimensional)::
 
 The Jacobian is stored in bordered block-diagonal form: N dense 4x4 blocks,
 plus (DC motor only) a border column d f_i / d v_b, a border row
-d f_vb / d y_i and a corner d f_vb / d v_b. See :mod:`stickslip_fast.linalg`.
+d f_vb / d y_i and a corner d f_vb / d v_b. See :mod:`stickslip_fast.model.linalg`.
 """
 
 from __future__ import annotations

@@ -203,7 +203,7 @@ bordered_matvec_inline = njit(**_INLINE)(bordered_matvec.py_func)
 def dense_w_factor(sigma: float, jac: np.ndarray, lu: np.ndarray, piv: np.ndarray) -> bool:
     """Factor W = sigma I - J (dense, n x n) into ``lu``; False if singular.
 
-    For small test problems (:mod:`stickslip_fast.testproblems`); the model uses
+    For small test problems (:mod:`stickslip_fast.core.testproblems`); the model uses
     the bordered O(N) factorisation above.
     """
     n = jac.shape[0]

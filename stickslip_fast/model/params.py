@@ -1,6 +1,6 @@
 """Slots of the packed parameter array, and eta'(eta): shared by System and the model.
 
-The compiled kernels get a :class:`~stickslip_fast.system.System` packed into a
+The compiled kernels get a :class:`~stickslip_fast.model.system.System` packed into a
 float64 array (:meth:`System.to_array`); these are its slots. Slot ``P_ETAP``
 (eta') is derived from eta by :func:`eta_prime`, never set by hand. This module
 imports nothing else from the package, so system.py and model.py can both use it.
