@@ -212,6 +212,35 @@ def test_refined_boundary_brackets_straddle_the_boundary(ref):
     assert np.all((b.u >= G1[0]) & (b.u <= G1[-1]) & (b.v >= G2[0]) & (b.v <= G2[-1]))
 
 
+def test_refinement_resumes_after_an_interruption_bit_identically(ref, tmp_path):
+    full = refine_boundary(ref, tol=1e-3, max_segments=5, store=False)
+    a = ssf.basins(S32, (G1, G2), out=tmp_path / "a.h5", **KW)
+    calls, plain = [0], a.label_plane
+
+    def dies_on_the_third_step(uv, **kw):
+        calls[0] += 1
+        if calls[0] == 3:
+            raise KeyboardInterrupt
+        return plain(uv, **kw)
+
+    a.label_plane = dies_on_the_third_step
+    with pytest.raises(KeyboardInterrupt):
+        refine_boundary(a, tol=1e-3, max_segments=5)
+    with h5py.File(tmp_path / "a.h5", "r") as h5:
+        assert h5["basins/boundary_progress"].attrs["step"] == 2
+        assert "boundary" not in h5["basins"]
+    with pytest.raises(ValueError, match="seed"):
+        refine_boundary(a, tol=1e-3, max_segments=5, seed=1)
+    a.label_plane = plain
+    b = refine_boundary(a, tol=1e-3, max_segments=5)
+    for name in ("ua", "ub", "label_a", "label_b", "status"):
+        np.testing.assert_array_equal(getattr(b, name), getattr(full, name), err_msg=name)
+    assert b.n_runs == full.n_runs
+    with h5py.File(tmp_path / "a.h5", "r") as h5:
+        assert "boundary_progress" not in h5["basins"]
+    np.testing.assert_array_equal(ssf.load_basins(tmp_path / "a.h5").boundary.ua, full.ua)
+
+
 def test_cli_basins_and_info(tmp_path, capsys, ref):
     from stickslip_fast.cli import main
 

@@ -113,6 +113,37 @@ def _segments(result: Any, max_segments: int | None, seed: int) -> tuple:
     return ua, ub, la, lb, n_pairs
 
 
+def _resume(result: Any, config: dict, restart: bool) -> dict | None:
+    """The checkpoint of an unfinished refinement with this ``config``, or None."""
+    from ..io.basins import read_refine_progress
+
+    saved = read_refine_progress(result.path)
+    if saved is None or restart:
+        return None
+    for key, value in config.items():
+        if saved["config"].get(key) != value:
+            raise ValueError(
+                f"{result.path}: an unfinished boundary refinement with {key}="
+                f"{saved['config'].get(key)!r} is stored, this call asks {key}={value!r}; "
+                "rerun with the stored settings to resume it, or pass restart=True to discard it"
+            )
+    return saved
+
+
+def _bisect(result: Any, ua, ub, la, lb, status, tol: float, threads: Any) -> int:
+    """One bisection step of every active bracket, in place; returns the runs it took."""
+    act = np.flatnonzero((status == 0) & (np.linalg.norm(ub - ua, axis=1) > tol))
+    if act.size == 0:
+        return 0
+    mid = 0.5 * (ua[act] + ub[act])
+    lm = result.label_plane(mid, threads=threads)
+    to_a, to_b = lm == la[act], lm == lb[act]
+    ua[act[to_a]] = mid[to_a]
+    ub[act[to_b]] = mid[to_b]
+    status[act[~(to_a | to_b)]] = 1
+    return int(act.size)
+
+
 def refine_boundary(
     result: Any,
     *,
@@ -122,8 +153,14 @@ def refine_boundary(
     threads: int | None = None,
     progress: bool | None = None,
     store: bool = True,
+    restart: bool = False,
 ) -> Boundary:
     """Refine the boundary of a basin map by bisection between differently labelled cells.
+
+    With a file (``store`` and a result read from or written to a file), the
+    brackets are saved after every bisection step, and a call with the same
+    ``tol``, ``max_segments`` and ``seed`` after an interruption resumes from the
+    last saved step, with a result bit-identical to an uninterrupted run.
 
     Parameters
     ----------
@@ -137,7 +174,12 @@ def refine_boundary(
     threads, progress
         As for :func:`basins` (the runs do not depend on ``threads``).
     store : bool
-        Write ``/basins/boundary`` into the result's file (if it has one).
+        Write ``/basins/boundary`` into the result's file (if it has one), and
+        checkpoint the brackets there while refining.
+    restart : bool
+        Discard an unfinished refinement stored in the file instead of resuming
+        it (without this, one stored with other settings is an error naming the
+        setting).
 
     Returns
     -------
@@ -154,23 +196,26 @@ def refine_boundary(
     status = np.zeros(len(ua), dtype=np.int8)
     length = np.max(np.linalg.norm(ub - ua, axis=1)) if len(ua) else 0.0
     n_iter = int(np.ceil(np.log2(length / tol))) if length > tol else 0
-    n_runs = 0
+    filed = store and result.path is not None
+    config = {"tol": tol, "max_segments": max_segments, "seed": int(seed), "n_segments": len(ua)}
+    saved = _resume(result, config, restart) if filed else None
+    done, n_runs = (saved["step"], saved["n_runs"]) if saved else (0, 0)
+    if saved:
+        ua, ub, status = saved["ua"], saved["ub"], saved["status"].astype(np.int8)
     bar = None
     if (progress if progress is not None else False) and n_iter:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=n_iter, desc="boundary bisection", unit="step")
-    for _ in range(n_iter):
-        act = np.flatnonzero((status == 0) & (np.linalg.norm(ub - ua, axis=1) > tol))
-        if act.size == 0:
+        bar = tqdm(total=n_iter, initial=done, desc="boundary bisection", unit="step")
+    for k in range(done, n_iter):
+        took = _bisect(result, ua, ub, la, lb, status, tol, threads)
+        if took == 0:
             break
-        mid = 0.5 * (ua[act] + ub[act])
-        lm = result.label_plane(mid, threads=threads)
-        n_runs += act.size
-        to_a, to_b = lm == la[act], lm == lb[act]
-        ua[act[to_a]] = mid[to_a]
-        ub[act[to_b]] = mid[to_b]
-        status[act[~(to_a | to_b)]] = 1
+        n_runs += took
+        if filed:
+            from ..io.basins import write_refine_progress
+
+            write_refine_progress(result.path, config, k + 1, n_runs, ua, ub, status)
         if bar is not None:
             bar.update()
     if bar is not None:
@@ -178,11 +223,12 @@ def refine_boundary(
     c = 0.5 * (ua + ub)
     b = Boundary(c[:, 0], c[:, 1], ua, ub, la, lb, status, tol, n_pairs, n_runs, int(seed))
     result.boundary = b
-    if store and result.path is not None:
-        from ..io.basins import replace_subgroup
+    if filed:
+        from ..io.basins import drop_refine_progress, replace_subgroup
 
         with replace_subgroup(result.path, "boundary") as h5:
             b.to_group(h5["basins"].create_group("boundary"))
+            drop_refine_progress(h5)
     return b
 
 

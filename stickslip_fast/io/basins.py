@@ -27,6 +27,12 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
                                (0 refined to tol, 1 a third outcome met); attrs tol,
                                n_pairs, n_runs, seed
       edge/                    (optional) the saddle check: see analysis.basins_boundary.EdgeCheck
+      boundary_progress/       (only while a refinement is unfinished) the brackets
+                               after the last completed bisection step: u_a, v_a,
+                               u_b, v_b, status; attrs config (JSON: tol,
+                               max_segments, seed, n_segments), step, n_runs. A
+                               re-run with the same settings resumes from it; it is
+                               deleted when ``boundary`` is written.
 
 Every dataset has its dimensions attached, so
 ``xarray.open_dataset(path, group="basins", engine="h5netcdf")`` reads it.
@@ -41,9 +47,17 @@ from typing import Any
 import h5py
 import numpy as np
 
-__all__ = ["write_basins", "read_basins_meta", "read_basins_extras", "write_group"]
+__all__ = [
+    "write_basins",
+    "read_basins_meta",
+    "read_basins_extras",
+    "write_group",
+    "read_refine_progress",
+    "write_refine_progress",
+]
 
-_KEEP = ("boundary", "edge")
+_KEEP = ("boundary", "edge", "boundary_progress")
+_PROGRESS = "boundary_progress"
 
 
 def _scale(g: h5py.Group, name: str, data: Any, long_name: str, **kw: Any) -> h5py.Dataset:
@@ -173,3 +187,43 @@ def replace_subgroup(path: str | Path, name: str) -> h5py.File:
     if name in g:
         del g[name]
     return h5
+
+
+def read_refine_progress(path: str | Path) -> dict | None:
+    """The checkpoint of an unfinished boundary refinement, or None.
+
+    Returns a dict with ``config`` (dict), ``step`` and ``n_runs`` (int), and the
+    arrays ``ua``, ``ub`` (m, 2) and ``status`` (m,).
+    """
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        g = h5.get(f"basins/{_PROGRESS}")
+        if g is None:
+            return None
+        return {
+            "config": json.loads(g.attrs["config"]),
+            "step": int(g.attrs["step"]),
+            "n_runs": int(g.attrs["n_runs"]),
+            "ua": np.stack([g["u_a"][...], g["v_a"][...]], axis=1),
+            "ub": np.stack([g["u_b"][...], g["v_b"][...]], axis=1),
+            "status": g["status"][...],
+        }
+
+
+def write_refine_progress(
+    path: str | Path, config: dict, step: int, n_runs: int, ua: np.ndarray, ub: np.ndarray,
+    status: np.ndarray,
+) -> None:  # fmt: skip
+    """Replace the refinement checkpoint by the brackets after bisection step ``step``."""
+    with replace_subgroup(path, _PROGRESS) as h5:
+        g = h5["basins"].create_group(_PROGRESS)
+        for name, data in (("u_a", ua[:, 0]), ("v_a", ua[:, 1]), ("u_b", ub[:, 0]),
+                           ("v_b", ub[:, 1]), ("status", status.astype("i1"))):  # fmt: skip
+            g.create_dataset(name, data=data)
+        g.attrs.update(config=json.dumps(config), step=int(step), n_runs=int(n_runs))
+        h5.flush()
+
+
+def drop_refine_progress(h5: h5py.File) -> None:
+    """Delete the refinement checkpoint of an open file (its refinement is stored)."""
+    if _PROGRESS in h5.get("basins", {}):
+        del h5["basins"][_PROGRESS]
