@@ -1,0 +1,97 @@
+"""Fig. 6's lower P1 fold and its P4 branch past the precision limit (issue 28, item 1).
+
+Single shooting ends shortly past each fold of Fig. 6 ("precision-limit": the unstable
+orbit's multiplier grows ~10x per 1e-5 in eta). ``continue_orbit(shooting="auto")`` goes
+on from there by multiple shooting. This script runs the two cases docs/orbits.md
+lists as not yet rerun with it, and prints (and saves as JSON) where each branch ends:
+
+* ``lower``: the P1 branch from eta = 2.0 downwards through its lower fold at
+  1.8430158079 and along the unstable side;
+* ``p4``: the period-4 branch born at the subcritical period-doubling of the P2 at
+  5.042952433 (``switch_branch``), continued upwards.
+
+    PYTHONPATH=. python3 scripts/ms_far_sides.py [lower] [p4] [--out FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import stickslip_fast as ssf  # noqa: E402
+
+# A point of the P2 orbit near its lower end (as in tests/test_continuation.py)
+P2_ETA = 5.043198103554579
+P2_POINT = [0.027234629670059556, 0.0, 0.12785148813700828, -0.0038733936156032087]
+
+
+def summary(name: str, br, seconds: float) -> dict:
+    """Where a branch ends, with its largest multiplier and what changed along it."""
+    mods = np.abs(br.multipliers)
+    lead = np.nanmax(np.where(np.isfinite(mods), mods, np.nan), axis=1)
+    out = {
+        "case": name,
+        "status": br.status,
+        "points": int(len(br.values)),
+        "eta_first": float(br.values[0]),
+        "eta_last": float(br.values[-1]),
+        "eta_range": [float(np.min(br.values)), float(np.max(br.values))],
+        "max_leading_multiplier": float(np.nanmax(lead)),
+        "leading_multiplier_last": float(lead[-1]),
+        "T_first": float(br.T[0]),
+        "T_last": float(br.T[-1]),
+        "period": int(br.period),
+        "bifurcations": [(b.kind, float(b.value)) for b in br.bifurcations],
+        "stick_count": sorted({int(c) for c in np.atleast_1d(getattr(br, "stick_count", []))}),
+        "seconds": seconds,
+        "eta": [float(v) for v in br.values],
+        "T": [float(v) for v in br.T],
+        "leading_multiplier": [float(v) for v in lead],
+    }
+    print(json.dumps({k: v for k, v in out.items() if k not in ("eta", "T", "leading_multiplier")}), flush=True)
+    return out
+
+
+def lower() -> dict:
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    o = ssf.find_orbit(s, ssf.simulate(s, 20000, stop="converged"))
+    t0 = time.perf_counter()
+    br = ssf.continue_orbit(o, "eta", (1.80, 2.0), ds=0.01, ds_max=0.02, max_points=400,
+                            direction=-1, shooting="auto")  # fmt: skip
+    return summary("lower P1 fold", br, time.perf_counter() - t0)
+
+
+def p4() -> dict:
+    s = ssf.System.preset("asymmetric", eta=P2_ETA)
+    o2 = ssf.find_orbit(s, np.array(P2_POINT), period=2)
+    br2 = ssf.continue_orbit(o2, "eta", (5.0428, 5.0433), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
+                             max_points=8, direction=-1)  # fmt: skip
+    pd = next(b for b in br2.bifurcations if b.kind == "period-doubling")
+    o4 = ssf.switch_branch(br2, pd)
+    t0 = time.perf_counter()
+    br = ssf.continue_orbit(o4, "eta", (5.0428, 5.0440), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
+                            max_points=400, direction=1, shooting="auto")  # fmt: skip
+    return summary("P4 branch", br, time.perf_counter() - t0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("cases", nargs="*", default=["lower", "p4"], choices=["lower", "p4"])
+    p.add_argument("--out", default=None, help="write the summaries as JSON here")
+    args = p.parse_args(argv)
+    res = [{"lower": lower, "p4": p4}[c]() for c in args.cases]
+    if args.out:
+        Path(args.out).write_text(json.dumps(res, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
