@@ -186,12 +186,7 @@ def refine_boundary(
     Boundary
         Also set as ``result.boundary``.
     """
-    step = float(np.min(np.diff(result.g1)))
-    tol = step / 64.0 if tol is None else float(tol)
-    if not np.isfinite(tol) or tol <= 0:
-        raise ValueError(f"tol must be a number > 0, got {tol!r}")
-    if max_segments is not None and (isinstance(max_segments, bool) or max_segments < 1):
-        raise ValueError(f"max_segments must be an integer >= 1 or None, got {max_segments!r}")
+    tol = _check_refine_args(result, tol, max_segments)
     ua, ub, la, lb, n_pairs = _segments(result, max_segments, seed)
     status = np.zeros(len(ua), dtype=np.int8)
     length = np.max(np.linalg.norm(ub - ua, axis=1)) if len(ua) else 0.0
@@ -202,8 +197,46 @@ def refine_boundary(
     done, n_runs = (saved["step"], saved["n_runs"]) if saved else (0, 0)
     if saved:
         ua, ub, status = saved["ua"], saved["ub"], saved["status"].astype(np.int8)
+    n_runs = _bisect_all(result, (ua, ub, la, lb, status), tol, threads, (done, n_iter), n_runs,
+                         config if filed else None, progress)  # fmt: skip
+    c = 0.5 * (ua + ub)
+    b = Boundary(c[:, 0], c[:, 1], ua, ub, la, lb, status, tol, n_pairs, n_runs, int(seed))
+    result.boundary = b
+    if filed:
+        _store_boundary(result.path, b)
+    return b
+
+
+def _check_refine_args(result: Any, tol: float | None, max_segments: int | None) -> float:
+    """The bracket length to refine to (default: 1/64 of g1's step), arguments checked."""
+    step = float(np.min(np.diff(result.g1)))
+    tol = step / 64.0 if tol is None else float(tol)
+    if not np.isfinite(tol) or tol <= 0:
+        raise ValueError(f"tol must be a number > 0, got {tol!r}")
+    if max_segments is not None and (isinstance(max_segments, bool) or max_segments < 1):
+        raise ValueError(f"max_segments must be an integer >= 1 or None, got {max_segments!r}")
+    return tol
+
+
+def _bisect_all(
+    result: Any,
+    brackets: tuple,
+    tol: float,
+    threads: Any,
+    steps: tuple[int, int],
+    n_runs: int,
+    checkpoint: dict | None,
+    progress: bool | None,
+) -> int:
+    """Bisection steps ``steps[0]`` to ``steps[1]`` of the brackets (ua, ub, la, lb,
+    status; changed in place), until none is active; returns the runs taken in all.
+
+    With ``checkpoint`` (the refinement's configuration), the brackets are written to the
+    result's file after every step, so that an interrupted refinement resumes there."""
+    ua, ub, la, lb, status = brackets
+    done, n_iter = steps
     bar = None
-    if (progress if progress is not None else False) and n_iter:
+    if progress and n_iter:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n_iter, initial=done, desc="boundary bisection", unit="step")
@@ -212,24 +245,24 @@ def refine_boundary(
         if took == 0:
             break
         n_runs += took
-        if filed:
+        if checkpoint is not None:
             from ..io.basins import write_refine_progress
 
-            write_refine_progress(result.path, config, k + 1, n_runs, ua, ub, status)
+            write_refine_progress(result.path, checkpoint, k + 1, n_runs, ua, ub, status)
         if bar is not None:
             bar.update()
     if bar is not None:
         bar.close()
-    c = 0.5 * (ua + ub)
-    b = Boundary(c[:, 0], c[:, 1], ua, ub, la, lb, status, tol, n_pairs, n_runs, int(seed))
-    result.boundary = b
-    if filed:
-        from ..io.basins import drop_refine_progress, replace_subgroup
+    return n_runs
 
-        with replace_subgroup(result.path, "boundary") as h5:
-            b.to_group(h5["basins"].create_group("boundary"))
-            drop_refine_progress(h5)
-    return b
+
+def _store_boundary(path: Any, b: Boundary) -> None:
+    """Write ``/basins/boundary`` (replacing one there) and drop the refinement's checkpoint."""
+    from ..io.basins import drop_refine_progress, replace_subgroup
+
+    with replace_subgroup(path, "boundary") as h5:
+        b.to_group(h5["basins"].create_group("boundary"))
+        drop_refine_progress(h5)
 
 
 # ------------------------------------------------------------------ the saddle check

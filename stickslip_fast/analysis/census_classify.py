@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..base.status import status_names
 from ..core.poincare import MAX_PERIOD, STATUS_NAMES
 from ..core.settings import STOP_KINDS
 from ..model.system import System
@@ -127,9 +128,7 @@ class CensusResult:
 
     @property
     def status(self) -> np.ndarray:
-        names = np.array(STATUS_NAMES + ("missing",), dtype=object)
-        codes = self.status_code
-        return names[np.where(codes < 0, len(STATUS_NAMES), codes)]
+        return status_names(self.status_code)
 
     @property
     def births(self) -> list[tuple[int, float]]:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.poincare import STATUS_NAMES
+from ..base.status import status_names
 from ..model.system import System
 from .census_classify import (
     DEFAULT_TRACK_THRESHOLD,
@@ -233,9 +233,7 @@ class CensusPlaneResult:
 
     @property
     def status(self) -> np.ndarray:
-        names = np.array(STATUS_NAMES + ("missing",), dtype=object)
-        codes = self.status_code
-        return names[np.where(codes < 0, len(STATUS_NAMES), codes)]
+        return status_names(self.status_code)
 
     @property
     def failed_fraction(self) -> np.ndarray:

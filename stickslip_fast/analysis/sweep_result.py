@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..base.status import status_names
 from ..core.poincare import ORBIT_STATUSES, STATUS_NAMES
 from ..core.settings import Settings
 from ..io import PER_VALUE_FIELDS, read_dataset, read_sweep
@@ -73,9 +74,7 @@ class SweepResult:
 
     @property
     def status(self) -> np.ndarray:
-        codes = self.status_code
-        names = np.array(STATUS_NAMES + ("missing",), dtype=object)
-        return names[np.where(codes < 0, len(STATUS_NAMES), codes)]
+        return status_names(self.status_code)
 
     @property
     def shape(self) -> tuple[int, ...]:

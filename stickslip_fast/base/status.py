@@ -6,7 +6,9 @@ so new statuses are only ever appended.
 
 from __future__ import annotations
 
-__all__ = ["STATUS_NAMES", "ORBIT_STATUSES", "FAILURE_STATUSES"]
+import numpy as np
+
+__all__ = ["STATUS_NAMES", "ORBIT_STATUSES", "FAILURE_STATUSES", "status_names"]
 
 STATUS_NAMES = (
     "ok",
@@ -40,3 +42,13 @@ ST_NOT_COMPUTED = -1
 ORBIT_STATUSES = ("ok",)
 #: Statuses of a run that did not finish: its final state is no start for the next value.
 FAILURE_STATUSES = ("nonfinite", "step-underflow", "max-steps", "error", "interrupted")
+
+
+def status_names(codes: np.ndarray) -> np.ndarray:
+    """The status name of every code (an object array of the shape of ``codes``).
+
+    A negative code (:data:`ST_NOT_COMPUTED`: a value not computed yet, e.g. in the
+    file of an interrupted run) is named "missing". The ``status`` of sweep and census
+    results."""
+    names = np.array(STATUS_NAMES + ("missing",), dtype=object)
+    return names[np.where(codes < 0, len(STATUS_NAMES), codes)]

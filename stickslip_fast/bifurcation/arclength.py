@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -102,6 +104,71 @@ def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
     return False, x, None, max_iter
 
 
+#: :func:`pseudo_arclength`'s docstring (kept out of the function body, like
+#: :func:`~stickslip_fast.analysis.census.census`'s: its parameters take more lines than
+#: the code, and the layout rule counts a function's lines).
+_PSEUDO_ARCLENGTH_DOC = """Follow G(x) = 0, x = (z, lambda), by pseudo-arclength continuation.
+
+Parameters
+----------
+evaluate : callable
+    x -> (ok, G, DG, A): the residual, its Jacobian (m x (m + 1)) and the
+    map's Jacobian in z (m x m; its eigenvalues are the multipliers).
+x0 : ndarray, shape (m + 1,)
+    A solution (G(x0) ~ 0).
+direction : float
+    +1 to start towards increasing lambda, -1 towards decreasing.
+bounds : (float, float)
+    The branch ends on the first of them it reaches: a step that would
+    leave [lo, hi] is corrected with lambda fixed at the bound instead.
+ds, ds_min, ds_max : float
+    First, smallest and largest arclength step. The step grows by 1.5
+    after a corrector that needed <= 3 iterations, halves after a failure.
+max_points : int
+tol : float
+    Corrector tolerance on max |G|.
+locate_tol : float
+    Bifurcations are located (Illinois secant on the test function along
+    the chord between two branch points) until lambda moves less than this.
+max_corrector : int
+    Most corrector iterations per step.
+jump : callable, optional
+    (x_old, x_new) -> True when x_new is not on the same smooth branch
+    (for orbits: the period in time jumped). Such a step, like a failed
+    corrector or one that moved more than ds / 2 from the predictor, is
+    rejected and ds halved. When ds falls below ds_min and the last
+    rejection was a jump, the branch ends with status "nonsmooth" within
+    ds_min of the discontinuity; otherwise with "step-too-small".
+tests : callable
+    (A, tangent) -> {kind: value}: test functions whose sign changes mark
+    bifurcations (default: those of a map's fixed points, fold /
+    period-doubling / Neimark-Sacker; equilibria use fold / Hopf).
+spectrum : callable, optional
+    A -> the eigenvalues recorded per point (default: by modulus, largest first).
+refine : sequence of (evaluate, tol, ds_min)
+    Tighter settings to go on with, in turn, where the corrector fails at
+    ``ds_min`` (not where the steps jump off the branch): the last point is
+    corrected again with the next stage's evaluator and ``tol`` (or, if
+    that fails, one of the few before it: :func:`_restart`; the points after
+    it are dropped), and the continuation resumes from it with
+    ``ds = ds_min`` and the stage's smaller ``ds_min``. The branch ends when
+    no stage is left (or no recent point can be corrected with it). For sharp folds whose turn is
+    narrower than ``ds_min`` or whose parameter extent is below ``tol`` over
+    the residual's sensitivity to lambda (docs/limits.md).
+
+Returns
+-------
+xs, mults, bifs, status
+    The points (k, m + 1), their multipliers (k, m), the located
+    bifurcations (kind, lambda, index, x) and the reason the branch ended:
+    "bounds", "max-points", "step-too-small" (the corrector failed),
+    "nonsmooth" (steps kept jumping off the branch) or "precision-limit"
+    (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
+    less than ``ds_min``; or the last corrector stopped at the residual's
+    round-off floor, :func:`_correct`, with no stage left).
+"""
+
+
 def pseudo_arclength(
     evaluate: Evaluator,
     x0: np.ndarray,
@@ -120,163 +187,180 @@ def pseudo_arclength(
     spectrum: Callable[[np.ndarray], np.ndarray] | None = None,
     refine: Sequence[tuple[Evaluator, float, float]] = (),
 ):
-    """Follow G(x) = 0, x = (z, lambda), by pseudo-arclength continuation.
-
-    Parameters
-    ----------
-    evaluate : callable
-        x -> (ok, G, DG, A): the residual, its Jacobian (m x (m + 1)) and the
-        map's Jacobian in z (m x m; its eigenvalues are the multipliers).
-    x0 : ndarray, shape (m + 1,)
-        A solution (G(x0) ~ 0).
-    direction : float
-        +1 to start towards increasing lambda, -1 towards decreasing.
-    bounds : (float, float)
-        The branch ends on the first of them it reaches: a step that would
-        leave [lo, hi] is corrected with lambda fixed at the bound instead.
-    ds, ds_min, ds_max : float
-        First, smallest and largest arclength step. The step grows by 1.5
-        after a corrector that needed <= 3 iterations, halves after a failure.
-    max_points : int
-    tol : float
-        Corrector tolerance on max |G|.
-    locate_tol : float
-        Bifurcations are located (Illinois secant on the test function along
-        the chord between two branch points) until lambda moves less than this.
-    max_corrector : int
-        Most corrector iterations per step.
-    jump : callable, optional
-        (x_old, x_new) -> True when x_new is not on the same smooth branch
-        (for orbits: the period in time jumped). Such a step, like a failed
-        corrector or one that moved more than ds / 2 from the predictor, is
-        rejected and ds halved. When ds falls below ds_min and the last
-        rejection was a jump, the branch ends with status "nonsmooth" within
-        ds_min of the discontinuity; otherwise with "step-too-small".
-    tests : callable
-        (A, tangent) -> {kind: value}: test functions whose sign changes mark
-        bifurcations (default: those of a map's fixed points, fold /
-        period-doubling / Neimark-Sacker; equilibria use fold / Hopf).
-    spectrum : callable, optional
-        A -> the eigenvalues recorded per point (default: by modulus, largest first).
-    refine : sequence of (evaluate, tol, ds_min)
-        Tighter settings to go on with, in turn, where the corrector fails at
-        ``ds_min`` (not where the steps jump off the branch): the last point is
-        corrected again with the next stage's evaluator and ``tol`` (or, if
-        that fails, one of the few before it: :func:`_restart`; the points after
-        it are dropped), and the continuation resumes from it with
-        ``ds = ds_min`` and the stage's smaller ``ds_min``. The branch ends when
-        no stage is left (or no recent point can be corrected with it). For sharp folds whose turn is
-        narrower than ``ds_min`` or whose parameter extent is below ``tol`` over
-        the residual's sensitivity to lambda (docs/limits.md).
-
-    Returns
-    -------
-    xs, mults, bifs, status
-        The points (k, m + 1), their multipliers (k, m), the located
-        bifurcations (kind, lambda, index, x) and the reason the branch ended:
-        "bounds", "max-points", "step-too-small" (the corrector failed),
-        "nonsmooth" (steps kept jumping off the branch) or "precision-limit"
-        (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
-        less than ``ds_min``; or the last corrector stopped at the residual's
-        round-off floor, :func:`_correct`, with no stage left).
-    """
-    ok, G, DG, A = evaluate(x0)
-    if not ok:
-        raise ValueError("the start could not be evaluated")
-    m = G.size
-    guess = np.zeros(m + 1)
-    guess[-1] = 1.0 if direction >= 0 else -1.0
-    t = _tangent(DG, guess)
-    xs = [x0.copy()]
-    spectrum = spectrum or _sorted_eigs
-    test_fn = tests
-    mults = [spectrum(A)]
-    tests = [test_fn(A, t)]
-    bifs: list[tuple[str, float, int, np.ndarray]] = []
+    walk = _Walk.start(evaluate, x0, direction, tol, ds, ds_min, refine, tests,
+                       spectrum or _sorted_eigs)  # fmt: skip
     lo, hi = bounds
     status = "max-points"
-    stages = list(refine)
-    ds_min_given = ds_min
-    while len(xs) < max_points:
-        x = xs[-1]
-        accepted = False
-        jumped = False
-        floored = False  # the last rejection: a corrector at the round-off floor
-        on_bound = False
-        while ds >= ds_min:
-            x_pred = x + ds * t
-            if not lo <= x_pred[-1] <= hi:
-                # the step leaves the interval: end on its bound (lambda fixed there)
-                edge = x_pred.copy()
-                edge[-1] = hi if x_pred[-1] > hi else lo
-                e_lam = np.zeros_like(x)
-                e_lam[-1] = 1.0
-                okc, x_new, data, its = _correct(evaluate, edge, e_lam, edge, tol, max_corrector)
-                if okc and not (jump is not None and jump(x, x_new)):
-                    on_bound = True
-                    accepted = True
-                    break
-                floored = data is NOISE_FLOOR
-                ds *= 0.5
+    while len(walk.xs) < max_points:
+        x = walk.xs[-1]
+        trial, walk.ds = _try_steps(walk.evaluate, x, walk.t, walk.ds, walk.ds_min, (lo, hi),
+                                    walk.tol, max_corrector, jump)  # fmt: skip
+        if not trial.accepted:
+            # a step that jumped off the branch ends it; a sharp end may go on, tighter
+            if not trial.jumped and walk.next_stage(max_corrector):
                 continue
-            okc, x_new, data, its = _correct(evaluate, x_pred, t, x_pred, tol, max_corrector)
-            jumped = False
-            floored = data is NOISE_FLOOR
-            if okc:
-                jumped = bool(jump is not None and jump(x, x_new))
-                # a corrector that went far from the predictor has left the branch
-                if not jumped and np.linalg.norm(x_new - x_pred) <= 0.5 * ds:
-                    accepted = True
-                    break
-            ds *= 0.5
-        if not accepted:
-            restart = None
-            while not jumped and stages and restart is None:
-                # a sharp end: correct a recent point again with tighter settings, go on
-                evaluate, tol, ds_min_next = stages.pop(0)
-                restart = _restart(evaluate, xs, tol, max_corrector)
-                if restart is not None:
-                    ds, ds_min = ds_min, min(ds_min, ds_min_next)
-            if restart is None:
-                status = "nonsmooth" if jumped else "step-too-small"
-                if floored:  # the residual's noise, not the step, stopped the corrector
-                    status = "precision-limit"
-                break
-            j, x_re, (_, DG, A) = restart
-            t = _tangent(DG, xs[j] - xs[j - 1] if j > 0 else t)
-            del xs[j + 1 :], mults[j + 1 :], tests[j + 1 :]
-            xs[j] = x_re
-            mults[j] = spectrum(A)
-            tests[j] = test_fn(A, t)
-            bifs = [b for b in bifs if b[2] < j]
-            continue
-        G, DG, A = data
-        t_new = _tangent(DG, t)
-        te = test_fn(A, t_new)
-        k = len(xs) - 1
-        for kind, prev in tests[-1].items():
-            cur = te[kind]
-            if math.isfinite(prev) and math.isfinite(cur) and prev * cur < 0:
-                loc = _locate(evaluate, x, x_new, kind, prev, cur, t, tol, locate_tol, test_fn)
-                if loc is not None:
-                    bifs.append((kind, float(loc[-1]), k, loc))
-        xs.append(x_new)
-        mults.append(spectrum(A))
-        tests.append(te)
-        t = t_new
-        if on_bound:
+            status = "nonsmooth" if trial.jumped else "step-too-small"
+            if trial.floored:  # the residual's noise, not the step, stopped the corrector
+                status = "precision-limit"
+            break
+        walk.accept(x, trial.x_new, trial.data, locate_tol)
+        if trial.on_bound:
             status = "bounds"
             break
-        if len(xs) > STALL_WINDOW:
-            # only the tighter stages take steps below ds_min: a crawl there means that
-            # Newton's reach has shrunk to the integration's precision (docs/limits.md)
-            last = np.asarray(xs[-STALL_WINDOW - 1 :])
-            if np.linalg.norm(np.diff(last, axis=0), axis=1).sum() < ds_min_given:
-                status = "precision-limit"
+        if _stalled(walk.xs, ds_min):  # the ds_min given: the stages lower walk.ds_min
+            status = "precision-limit"
+            break
+        if trial.its <= 3:
+            walk.ds = min(walk.ds * 1.5, ds_max)
+    return np.array(walk.xs), np.array(walk.mults), walk.bifs, status
+
+
+pseudo_arclength.__doc__ = _PSEUDO_ARCLENGTH_DOC
+
+
+@dataclass
+class _Trial:
+    """The outcome of :func:`_try_steps`: the accepted point, or why none was.
+
+    ``jumped`` and ``floored`` describe the last rejection (a step that jumped off the
+    branch; a corrector that stopped at the residual's round-off floor)."""
+
+    accepted: bool = False
+    jumped: bool = False
+    floored: bool = False
+    on_bound: bool = False
+    x_new: np.ndarray | None = None
+    data: Any = None
+    its: int = 0
+
+
+def _try_steps(
+    evaluate: Evaluator,
+    x: np.ndarray,
+    t: np.ndarray,
+    ds: float,
+    ds_min: float,
+    bounds: tuple[float, float],
+    tol: float,
+    max_corrector: int,
+    jump: Callable[[np.ndarray, np.ndarray], bool] | None,
+) -> tuple[_Trial, float]:
+    """Predict from x along t and correct, halving ds until a step is accepted or ds <
+    ds_min; returns the :class:`_Trial` and the step size reached."""
+    lo, hi = bounds
+    trial = _Trial()
+    while ds >= ds_min:
+        x_pred = x + ds * t
+        if not lo <= x_pred[-1] <= hi:
+            # the step leaves the interval: end on its bound (lambda fixed there)
+            edge = x_pred.copy()
+            edge[-1] = hi if x_pred[-1] > hi else lo
+            e_lam = np.zeros_like(x)
+            e_lam[-1] = 1.0
+            okc, x_new, data, its = _correct(evaluate, edge, e_lam, edge, tol, max_corrector)
+            if okc and not (jump is not None and jump(x, x_new)):
+                trial.accepted = trial.on_bound = True
+                trial.x_new, trial.data, trial.its = x_new, data, its
                 break
-        if its <= 3:
-            ds = min(ds * 1.5, ds_max)
-    return np.array(xs), np.array(mults), bifs, status
+            trial.floored = data is NOISE_FLOOR
+            ds *= 0.5
+            continue
+        okc, x_new, data, its = _correct(evaluate, x_pred, t, x_pred, tol, max_corrector)
+        trial.jumped = False
+        trial.floored = data is NOISE_FLOOR
+        if okc:
+            trial.jumped = bool(jump is not None and jump(x, x_new))
+            # a corrector that went far from the predictor has left the branch
+            if not trial.jumped and np.linalg.norm(x_new - x_pred) <= 0.5 * ds:
+                trial.accepted = True
+                trial.x_new, trial.data, trial.its = x_new, data, its
+                break
+        ds *= 0.5
+    return trial, ds
+
+
+def _stalled(xs: list[np.ndarray], ds_min_given: float) -> bool:
+    """The last :data:`STALL_WINDOW` steps together advanced less than ``ds_min_given``.
+
+    Only the tighter stages take steps below ds_min: a crawl there means that Newton's
+    reach has shrunk to the integration's precision (docs/limits.md)."""
+    if len(xs) <= STALL_WINDOW:
+        return False
+    last = np.asarray(xs[-STALL_WINDOW - 1 :])
+    return bool(np.linalg.norm(np.diff(last, axis=0), axis=1).sum() < ds_min_given)
+
+
+@dataclass
+class _Walk:
+    """A branch being followed: its points, multipliers, test values and bifurcations so
+    far, the tangent at the last point, and the settings in force (a ``refine`` stage
+    replaces ``evaluate``, ``tol`` and ``ds_min``)."""
+
+    evaluate: Evaluator
+    tol: float
+    ds: float
+    ds_min: float
+    stages: list[tuple[Evaluator, float, float]]
+    test_fn: Callable[[np.ndarray, np.ndarray], dict[str, float]]
+    spectrum: Callable[[np.ndarray], np.ndarray]
+    t: np.ndarray
+    xs: list[np.ndarray] = field(default_factory=list)
+    mults: list[np.ndarray] = field(default_factory=list)
+    tests: list[dict[str, float]] = field(default_factory=list)
+    bifs: list[tuple[str, float, int, np.ndarray]] = field(default_factory=list)
+
+    @classmethod
+    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, test_fn, spectrum) -> _Walk:
+        """The walk at x0, its tangent oriented by ``direction`` in lambda."""
+        ok, G, DG, A = evaluate(x0)
+        if not ok:
+            raise ValueError("the start could not be evaluated")
+        guess = np.zeros(G.size + 1)
+        guess[-1] = 1.0 if direction >= 0 else -1.0
+        t = _tangent(DG, guess)
+        walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()])
+        walk.mults.append(spectrum(A))
+        walk.tests.append(test_fn(A, t))
+        return walk
+
+    def accept(self, x: np.ndarray, x_new: np.ndarray, data, locate_tol: float) -> None:
+        """Append x_new (corrected, with ``data`` = (G, DG, A)), locating the bifurcations
+        whose test functions change sign between x and x_new."""
+        G, DG, A = data
+        t_new = _tangent(DG, self.t)
+        te = self.test_fn(A, t_new)
+        k = len(self.xs) - 1
+        for kind, prev in self.tests[-1].items():
+            cur = te[kind]
+            if math.isfinite(prev) and math.isfinite(cur) and prev * cur < 0:
+                loc = _locate(self.evaluate, x, x_new, kind, prev, cur, self.t, self.tol,
+                              locate_tol, self.test_fn)  # fmt: skip
+                if loc is not None:
+                    self.bifs.append((kind, float(loc[-1]), k, loc))
+        self.xs.append(x_new)
+        self.mults.append(self.spectrum(A))
+        self.tests.append(te)
+        self.t = t_new
+
+    def next_stage(self, max_corrector: int) -> bool:
+        """Go on with the next ``refine`` stage that corrects a recent point again
+        (:func:`_restart`), dropping the points after it; False when none is left."""
+        restart = None
+        while self.stages and restart is None:
+            self.evaluate, self.tol, ds_min_next = self.stages.pop(0)
+            restart = _restart(self.evaluate, self.xs, self.tol, max_corrector)
+            if restart is not None:
+                self.ds, self.ds_min = self.ds_min, min(self.ds_min, ds_min_next)
+        if restart is None:
+            return False
+        j, x_re, (_, DG, A) = restart
+        self.t = _tangent(DG, self.xs[j] - self.xs[j - 1] if j > 0 else self.t)
+        del self.xs[j + 1 :], self.mults[j + 1 :], self.tests[j + 1 :]
+        self.xs[j] = x_re
+        self.mults[j] = self.spectrum(A)
+        self.tests[j] = self.test_fn(A, self.t)
+        self.bifs = [b for b in self.bifs if b[2] < j]
+        return True
 
 
 def _restart(

@@ -17,9 +17,9 @@ from .multishoot_branch import append_branch, continue_multiple, ms_start
 from .orbits import (
     EQUILIBRIUM_SPEED,
     SECTION_INDEX,
-    SHOOTING_MODES,
     Orbit,
     _field,
+    check_shooting,
     return_map,
     stick_phases,
 )
@@ -142,6 +142,72 @@ def _orbit_evaluator(
     return evaluate, full, system_at, periods
 
 
+#: :func:`continue_orbit`'s docstring (kept out of the function body, as for
+#: :func:`~stickslip_fast.analysis.census.census`: the layout rule counts a
+#: function's lines, and its parameters take more lines than its code).
+_CONTINUE_ORBIT_DOC = """Continue a periodic orbit in one parameter (pseudo-arclength).
+
+Parameters
+----------
+orbit : Orbit
+    A converged orbit from :func:`find_orbit`.
+param : str
+    A :class:`System` field (one of ``SWEEPABLE``), e.g. "eta".
+bounds : (float, float)
+    The parameter interval; it must contain the orbit's value.
+ds, ds_min, ds_max : float
+    First, smallest and largest step in arclength (section coordinates and
+    the parameter together).
+max_points : int
+    Most branch points.
+direction : float
+    +1: start towards increasing ``param``; -1: decreasing.
+tol : float
+    Corrector tolerance on ``max |P^p(z) - z|``.
+rtol, atol : float
+    Integration tolerances of the return map.
+fd_step : float
+    Relative step of the central difference of the vector field and its
+    Jacobian in the parameter, which drives the parameter sensitivity that
+    gives dP/dlambda (one-sided at the edge of the parameter's valid range;
+    see :func:`~stickslip_fast.bifurcation.returnmap.return_map`).
+stick_events : bool
+    Record the stick phases of every point (``Branch.stick_count``,
+    ``stick_time``; :func:`~stickslip_fast.bifurcation.stickphases.stick_phases`) and locate
+    every change of their number between two points (bisection on the
+    branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
+sharp_ends : bool
+    Where the corrector fails at ``ds_min``, go on with the tighter
+    settings of :data:`SHARP_END_STAGES` in turn (corrector tolerance,
+    integration tolerances, smallest step; each only where tighter than the
+    ones given), from the last point corrected again with them. This passes
+    folds narrower than the defaults resolve, e.g. both ends of Fig. 6's
+    period-1 branch (docs/limits.md). The branch keeps the tighter settings
+    from there on; ``T`` and the points are those of the stage that
+    computed them.
+shooting : {"single", "multiple", "auto"}
+    "single": fixed points of the return map. "multiple": the orbit as
+    ``segments`` segments (:mod:`.multishoot`; the arclength then measures
+    all segment starts and T, so ``ds`` means a longer step in the orbit
+    than with single shooting). "auto": single, and where it ends with
+    "step-too-small" or "precision-limit", multiple shooting from its last
+    point on (same direction in the parameter, the tightest stage's
+    tolerances), appended to the branch (``status`` names both ends).
+segments : int
+    m >= 1, the segments of multiple shooting.
+
+Returns
+-------
+Branch
+
+Raises
+------
+ValueError
+    For an unconverged orbit, an unknown ``param``, bounds that do not
+    contain the start, or non-positive step sizes (naming the argument).
+"""
+
+
 def continue_orbit(
     orbit: Orbit,
     param: str,
@@ -161,88 +227,36 @@ def continue_orbit(
     shooting: str = "single",
     segments: int = DEFAULT_SEGMENTS,
 ) -> Branch:
-    """Continue a periodic orbit in one parameter (pseudo-arclength).
-
-    Parameters
-    ----------
-    orbit : Orbit
-        A converged orbit from :func:`find_orbit`.
-    param : str
-        A :class:`System` field (one of ``SWEEPABLE``), e.g. "eta".
-    bounds : (float, float)
-        The parameter interval; it must contain the orbit's value.
-    ds, ds_min, ds_max : float
-        First, smallest and largest step in arclength (section coordinates and
-        the parameter together).
-    max_points : int
-        Most branch points.
-    direction : float
-        +1: start towards increasing ``param``; -1: decreasing.
-    tol : float
-        Corrector tolerance on ``max |P^p(z) - z|``.
-    rtol, atol : float
-        Integration tolerances of the return map.
-    fd_step : float
-        Relative step of the central difference of the vector field and its
-        Jacobian in the parameter, which drives the parameter sensitivity that
-        gives dP/dlambda (one-sided at the edge of the parameter's valid range;
-        see :func:`~stickslip_fast.bifurcation.returnmap.return_map`).
-    stick_events : bool
-        Record the stick phases of every point (``Branch.stick_count``,
-        ``stick_time``; :func:`~stickslip_fast.bifurcation.stickphases.stick_phases`) and locate
-        every change of their number between two points (bisection on the
-        branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
-    sharp_ends : bool
-        Where the corrector fails at ``ds_min``, go on with the tighter
-        settings of :data:`SHARP_END_STAGES` in turn (corrector tolerance,
-        integration tolerances, smallest step; each only where tighter than the
-        ones given), from the last point corrected again with them. This passes
-        folds narrower than the defaults resolve, e.g. both ends of Fig. 6's
-        period-1 branch (docs/limits.md). The branch keeps the tighter settings
-        from there on; ``T`` and the points are those of the stage that
-        computed them.
-    shooting : {"single", "multiple", "auto"}
-        "single": fixed points of the return map. "multiple": the orbit as
-        ``segments`` segments (:mod:`.multishoot`; the arclength then measures
-        all segment starts and T, so ``ds`` means a longer step in the orbit
-        than with single shooting). "auto": single, and where it ends with
-        "step-too-small" or "precision-limit", multiple shooting from its last
-        point on (same direction in the parameter, the tightest stage's
-        tolerances), appended to the branch (``status`` names both ends).
-    segments : int
-        m >= 1, the segments of multiple shooting.
-
-    Returns
-    -------
-    Branch
-
-    Raises
-    ------
-    ValueError
-        For an unconverged orbit, an unknown ``param``, bounds that do not
-        contain the start, or non-positive step sizes (naming the argument).
-    """
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
     lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
                                max_points)  # fmt: skip
-    if shooting not in SHOOTING_MODES:
-        raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
-    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
-        raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
+    check_shooting(shooting, segments)
     kw = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol, rtol=rtol,
               atol=atol, fd_step=fd_step, stick_events=stick_events, sharp_ends=sharp_ends)  # fmt: skip
     if shooting == "multiple":
-        x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, int(segments), rtol,
-                            atol, fd_step, tol, MESH_LIMIT)  # fmt: skip
-        if x0 is None:
-            raise ValueError("orbit could not be corrected by multiple shooting")
-        return continue_multiple(orbit.system, param, orbit.period, x0, direction, (lo, hi),
-                                 segments=mesh, stages=SHARP_END_STAGES, **kw)  # fmt: skip
+        return _continue_multiple_from(orbit, param, (lo, hi), direction, int(segments), kw)
     branch = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
     if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
         branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw)
     return branch
+
+
+continue_orbit.__doc__ = _CONTINUE_ORBIT_DOC
+
+
+def _continue_multiple_from(
+    orbit: Orbit, param: str, bounds: tuple[float, float], direction: float, segments: int, kw
+) -> Branch:
+    """continue_orbit with shooting="multiple": the orbit corrected by multiple shooting
+    (``segments`` even cuts, refined by :data:`MESH_LIMIT`), then continued."""
+    rtol, atol, fd_step, tol = kw["rtol"], kw["atol"], kw["fd_step"], kw["tol"]
+    x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, segments, rtol, atol,
+                        fd_step, tol, MESH_LIMIT)  # fmt: skip
+    if x0 is None:
+        raise ValueError("orbit could not be corrected by multiple shooting")
+    return continue_multiple(orbit.system, param, orbit.period, x0, direction, bounds,
+                             segments=mesh, stages=SHARP_END_STAGES, **kw)  # fmt: skip
 
 
 def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):

@@ -140,6 +140,79 @@ def _start_from(system: System, start: Any, period: int | None, t_max: float):
     return y, period
 
 
+#: :func:`find_orbit`'s docstring (kept out of the function body, as for
+#: :func:`~stickslip_fast.analysis.census.census`: the layout rule counts a
+#: function's lines, and its parameters take more lines than its code).
+_FIND_ORBIT_DOC = """Find a periodic orbit by damped Newton on P^p(z) - z over the section.
+
+Parameters
+----------
+system : System
+start : array_like, SimulationResult or census Attractor
+    A state (on the section dx1 = 0 or not: a state off it is first flowed
+    to its next upward crossing), a :func:`simulate` result whose last
+    Poincare point is the start (e.g. one run with ``stop="converged"``),
+    or an attractor of a :func:`census` of kind "orbit" (its first point;
+    ``system`` must be the census's system at that attractor's value).
+period : int, optional
+    p >= 1, the number of section crossings per period. Default: the
+    SimulationResult's or attractor's period, or, for a state, the period a
+    converged simulation from it finds.
+tol : float
+    Convergence: ``max |P^p(z) - z|`` <= tol over the section coordinates.
+max_iter : int
+    Most Newton steps.
+rtol, atol : float
+    Tolerances of the variational integration (tighter than the simulation
+    defaults: the residual cannot go below the map's integration noise).
+t_max : float
+    Longest time allowed between two crossings.
+tangent_atol : float
+    Tolerance of the tangent vectors relative to their length (see
+    :func:`return_map`).
+shooting : {"single", "multiple", "auto"}
+    "single": Newton on the return map. "multiple": the period cut evenly in
+    time into ``segments`` segments joined by continuity (:mod:`.multishoot`;
+    the multipliers from the segments' factors by a periodic QR scheme), for
+    orbits so unstable that one integration over the period amplifies its
+    rounding beyond ``tol``. "auto": single, then multiple from the same start
+    where single shooting fails ("no-progress" or "max-iter": its precision
+    limit, docs/limits.md).
+segments : int
+    m >= 1, the segments of multiple shooting (even cuts in time); those that
+    amplify by more than ``multishoot.MESH_LIMIT`` are then bisected (up to 64
+    segments in all).
+
+Returns
+-------
+Orbit
+    Check ``converged`` (or ``status``): a failure is returned with the last
+    iterate and its residual, never as a converged orbit.
+
+Raises
+------
+ValueError
+    For a period < 1, a non-finite start or tolerance, or a start that
+    cannot be used (naming the argument).
+
+Notes
+-----
+Each step solves (D P^p - I) dz = -(P^p(z) - z) with the variational
+Jacobian (docs/orbits.md) and halves the step until the residual
+decreases (at most 20 halvings). At convergence the start is moved to the
+crossing with the smallest x1 and Newton continues from there, so the
+residual, ``jacobian`` and ``multipliers`` all refer to ``points[0]``.
+
+Examples
+--------
+>>> import stickslip_fast as ssf
+>>> s = ssf.System.preset("asymmetric", eta=2.0)
+>>> orbit = ssf.find_orbit(s, ssf.simulate(s, 5000, stop="converged"))  # doctest: +SKIP
+>>> orbit.multipliers[0].real  # doctest: +SKIP
+-0.0969...
+"""
+
+
 def find_orbit(
     system: System,
     start: Any,
@@ -154,79 +227,8 @@ def find_orbit(
     shooting: str = "single",
     segments: int = DEFAULT_SEGMENTS,
 ) -> Orbit:
-    """Find a periodic orbit by damped Newton on P^p(z) - z over the section.
-
-    Parameters
-    ----------
-    system : System
-    start : array_like, SimulationResult or census Attractor
-        A state (on the section dx1 = 0 or not: a state off it is first flowed
-        to its next upward crossing), a :func:`simulate` result whose last
-        Poincare point is the start (e.g. one run with ``stop="converged"``),
-        or an attractor of a :func:`census` of kind "orbit" (its first point;
-        ``system`` must be the census's system at that attractor's value).
-    period : int, optional
-        p >= 1, the number of section crossings per period. Default: the
-        SimulationResult's or attractor's period, or, for a state, the period a
-        converged simulation from it finds.
-    tol : float
-        Convergence: ``max |P^p(z) - z|`` <= tol over the section coordinates.
-    max_iter : int
-        Most Newton steps.
-    rtol, atol : float
-        Tolerances of the variational integration (tighter than the simulation
-        defaults: the residual cannot go below the map's integration noise).
-    t_max : float
-        Longest time allowed between two crossings.
-    tangent_atol : float
-        Tolerance of the tangent vectors relative to their length (see
-        :func:`return_map`).
-    shooting : {"single", "multiple", "auto"}
-        "single": Newton on the return map. "multiple": the period cut evenly in
-        time into ``segments`` segments joined by continuity (:mod:`.multishoot`;
-        the multipliers from the segments' factors by a periodic QR scheme), for
-        orbits so unstable that one integration over the period amplifies its
-        rounding beyond ``tol``. "auto": single, then multiple from the same start
-        where single shooting fails ("no-progress" or "max-iter": its precision
-        limit, docs/limits.md).
-    segments : int
-        m >= 1, the segments of multiple shooting (even cuts in time); those that
-        amplify by more than ``multishoot.MESH_LIMIT`` are then bisected (up to 64
-        segments in all).
-
-    Returns
-    -------
-    Orbit
-        Check ``converged`` (or ``status``): a failure is returned with the last
-        iterate and its residual, never as a converged orbit.
-
-    Raises
-    ------
-    ValueError
-        For a period < 1, a non-finite start or tolerance, or a start that
-        cannot be used (naming the argument).
-
-    Notes
-    -----
-    Each step solves (D P^p - I) dz = -(P^p(z) - z) with the variational
-    Jacobian (docs/orbits.md) and halves the step until the residual
-    decreases (at most 20 halvings). At convergence the start is moved to the
-    crossing with the smallest x1 and Newton continues from there, so the
-    residual, ``jacobian`` and ``multipliers`` all refer to ``points[0]``.
-
-    Examples
-    --------
-    >>> import stickslip_fast as ssf
-    >>> s = ssf.System.preset("asymmetric", eta=2.0)
-    >>> orbit = ssf.find_orbit(s, ssf.simulate(s, 5000, stop="converged"))  # doctest: +SKIP
-    >>> orbit.multipliers[0].real  # doctest: +SKIP
-    -0.0969...
-    """
     _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter)
-    if shooting not in SHOOTING_MODES:
-        raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
-    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
-        raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
+    check_shooting(shooting, segments)
     period = None if period is None else int(period)
     z, period = _start_from(system, start, period, t_max)
     kw = dict(tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, t_max=t_max,
@@ -239,6 +241,25 @@ def find_orbit(
         if multi.converged or multi.residual < orbit.residual:
             return multi
     return orbit
+
+
+find_orbit.__doc__ = _FIND_ORBIT_DOC
+
+
+def check_shooting(shooting: str, segments: int) -> None:
+    """Check the ``shooting`` and ``segments`` arguments of :func:`find_orbit` and
+    :func:`~stickslip_fast.bifurcation.orbit_branch.continue_orbit`.
+
+    Raises
+    ------
+    ValueError
+        For a mode not in :data:`SHOOTING_MODES` or a segment count that is not an
+        integer >= 1, naming the argument.
+    """
+    if shooting not in SHOOTING_MODES:
+        raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
+    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
+        raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
 
 
 def _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter) -> None:

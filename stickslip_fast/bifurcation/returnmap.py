@@ -115,20 +115,55 @@ def return_map(
     """
     n = system.n_state
     mask = np.arange(n) != SECTION_INDEX
-    p_arr = system.to_array()
     y = np.array(z, dtype=float)
-    # a unit vector when no tangents are wanted: the tangent error norm is relative to |u|
-    U = np.ascontiguousarray(np.eye(n)[:, mask] if tangents else np.eye(n)[:, :1])
-    sens_p, sens_inv = _sensitivity_params(system, param if tangents else None, param_step)
-    if sens_p is not None:
-        U = np.ascontiguousarray(np.hstack([U, np.zeros((n, 1))]))
-    variant = kernel_variant(system.n_oscillators, system.is_dc_motor)
+    sens = _sensitivity_params(system, param if tangents else None, param_step)
+    U = _initial_tangents(n, mask, tangents, sens[0] is not None)
+    integrate = _crossing_integrator(system, sens, t_max, rtol, atol, tangent_atol)
     pts = np.full((period, n), np.nan)
     times = np.full(period, np.nan)
     t_acc = 0.0
-    e = np.zeros(n)
-    e[SECTION_INDEX] = 1.0
     for i in range(period):
+        status, y1, U1, t = integrate(y, U)
+        if status != "ok":
+            return status, pts, times, None
+        t_acc += t
+        pts[i] = y1
+        times[i] = t_acc
+        if tangents:
+            U = _project_on_section(system, y1, U1)
+        y = np.ascontiguousarray(y1)
+    return "ok", pts, times, (U[mask] if tangents else None)
+
+
+def _initial_tangents(n: int, mask: np.ndarray, tangents: bool, sensitivity: bool) -> np.ndarray:
+    """The tangent vectors at the start: the section's coordinate directions (a unit vector
+    when no tangents are wanted: the tangent error norm is relative to |u|), and a zero
+    column for the parameter sensitivity."""
+    U = np.ascontiguousarray(np.eye(n)[:, mask] if tangents else np.eye(n)[:, :1])
+    if sensitivity:
+        U = np.ascontiguousarray(np.hstack([U, np.zeros((n, 1))]))
+    return U
+
+
+def _crossing_integrator(
+    system: System,
+    sens: tuple[np.ndarray | None, float],
+    t_max: float,
+    rtol: float,
+    atol: float,
+    tangent_atol: float,
+):
+    """``integrate(y, U) -> (status, y1, U1, t)``: from y, put on the section (its dx1
+    entry set to 0, in place), to the next upward crossing, with the tangents U (and the
+    sensitivity, with ``sens``).
+
+    ``status`` is "ok", the driver's status of a failed run, "no-crossings" (``t_max``
+    reached) or "nonfinite" (a state that is not finite)."""
+    p_arr = system.to_array()
+    variant = kernel_variant(system.n_oscillators, system.is_dc_motor)
+    sens_p, sens_inv = sens
+
+    def integrate(y: np.ndarray, U: np.ndarray):
         y[SECTION_INDEX] = 0.0  # exactly on the section: no crossing at t = 0
         args = (y, U, p_arr, system.n_oscillators, system.is_dc_motor, variant, float(t_max), 1,
                 float(rtol), float(atol), float(tangent_atol))  # fmt: skip
@@ -143,18 +178,18 @@ def return_map(
         status = STATUS_NAMES[code]
         if status == "ok" and not math.isfinite(t):
             status = "no-crossings"
-        if status != "ok" or not np.all(np.isfinite(y1)):
-            return (status if status != "ok" else "nonfinite"), pts, times, None
-        t_acc += t
-        pts[i] = y1
-        times[i] = t_acc
-        if tangents:
-            f = _field(system, y1)
-            # projection along the flow onto the section (see the module docstring)
-            U = np.ascontiguousarray(U1 - np.outer(f, U1[SECTION_INDEX] / f[SECTION_INDEX]))
-        y = np.ascontiguousarray(y1)
-    jac = U[mask] if tangents else None
-    return "ok", pts, times, jac
+        if status == "ok" and not np.all(np.isfinite(y1)):
+            status = "nonfinite"
+        return status, y1, U1, t
+
+    return integrate
+
+
+def _project_on_section(system: System, y1: np.ndarray, U1: np.ndarray) -> np.ndarray:
+    """The tangents U1 at the crossing y1 projected along the flow onto the section (see
+    :mod:`.orbits`): their dx1 rows become 0."""
+    f = _field(system, y1)
+    return np.ascontiguousarray(U1 - np.outer(f, U1[SECTION_INDEX] / f[SECTION_INDEX]))
 
 
 def _sensitivity_params(system: System, param: str | None, rel_step: float):
