@@ -56,14 +56,16 @@ def _cmd_continue(args: argparse.Namespace) -> int:
 
 
 def _curves(branch, curve, tol, args, say):
-    """[continue].param2: every fold and period-doubling of ``branch`` followed in param2,
-    into OUTPUT's stem + ``.curve<k>.h5``."""
+    """[continue].param2: every fold and period-doubling of an orbit ``branch`` (every fold
+    and Hopf point of an equilibrium branch) followed in param2, into OUTPUT's stem +
+    ``.curve<k>.h5``."""
     from ..bifurcation.curve import continue_bifurcation
 
     out = Path(args.output)
-    bifs = [b for b in branch.bifurcations if b.kind in ("fold", "period-doubling")]
+    kinds = ("fold", "period-doubling") if branch.period else ("fold", "hopf")
+    bifs = [b for b in branch.bifurcations if b.kind in kinds]
     if not bifs:
-        say("param2: the branch has no fold or period-doubling")
+        say(f"param2: the branch has no {' or '.join(kinds)}")
     for k, bif in enumerate(bifs, start=1):
         say(
             f"following the {bif.kind} at {branch.param} = {bif.value:.10g} in {curve['param2']} ..."
