@@ -91,7 +91,9 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
         say("switch: the branch has no period-doubling")
     for k, pd in enumerate(pds, start=1):
         say(f"switching at the period-doubling at {branch.param} = {pd.value:.10g} ...")
-        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10))
+        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10),
+                              shooting=settings.get("shooting", "single"),
+                              **{k: settings[k] for k in ("segments",) if k in settings})  # fmt: skip
         if not orbit.converged:
             print(f"period-doubling {k} at {pd.value:.10g}: {orbit.message}", file=sys.stderr)
             continue
