@@ -180,3 +180,14 @@ def test_cli_follows_the_equilibrium_branch_s_hopf_point_and_folds(dc_branch, tm
     # Jacobian's eigenvalues from -4.8e3 to -3.6e-5): Newton on the augmented system does
     # not converge there, and the curve file says so (docs/orbits.md)
     assert curves[2].status in ("start-failed", "bounds")
+
+
+def test_bad_input_names_the_argument(dc_branch):
+    hopf = dc_branch.bifurcations[0]
+    pd = ssf.Bifurcation("period-doubling", hopf.value, hopf.index, hopf.point)
+    with pytest.raises(ValueError, match="equilibrium branch"):
+        ssf.continue_bifurcation(dc_branch, pd, "eta", (1.9, 2.1))
+    with pytest.raises(ValueError, match="param2"):
+        ssf.continue_bifurcation(dc_branch, hopf, "beta", (0.0, 0.1))
+    with pytest.raises(ValueError, match="bounds2"):
+        ssf.continue_bifurcation(dc_branch, hopf, "eta", (2.5, 3.0))
