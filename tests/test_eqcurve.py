@@ -191,3 +191,28 @@ def test_bad_input_names_the_argument(dc_branch):
         ssf.continue_bifurcation(dc_branch, hopf, "beta", (0.0, 0.1))
     with pytest.raises(ValueError, match="bounds2"):
         ssf.continue_bifurcation(dc_branch, hopf, "eta", (2.5, 3.0))
+
+
+def test_first_lyapunov_coefficient_of_the_dc_motor_hopf_point(dc_branch):
+    # the engine's Jacobian with the default step (0.01 eps) against the independent
+    # SciPy/NumPy model's Jacobian (tests/reference) with a ten times smaller step: l1 > 0,
+    # a subcritical Hopf point (an unstable cycle on the stable side)
+    import sys
+    from pathlib import Path
+
+    from stickslip_fast.bifurcation.eqcurve import equilibrium_evaluator
+
+    sys.path.insert(0, str(Path(__file__).parent / "reference"))
+    import scipy_model
+
+    hopf = dc_branch.bifurcations[0]
+    s = SYSTEM.replace(beta=hopf.value)
+    base = equilibrium_evaluator(s, "beta", "eta")
+    lam = np.array([hopf.value, 2.0])
+    J = base(np.r_[hopf.point, lam])[3]
+    omega = np.abs(np.linalg.eigvals(J).imag).max()
+    l1 = first_lyapunov(lambda y: base(np.r_[y, lam])[3], hopf.point, J, omega, 0.01 * s.eps)
+    p = {**s.to_dict(), "n_oscillators": 1}
+    ref = first_lyapunov(lambda y: scipy_model.jac(0.0, y, p), hopf.point,
+                         scipy_model.jac(0.0, hopf.point, p), omega, 1e-3 * s.eps)  # fmt: skip
+    assert l1 > 0 and abs(l1 - ref) < 1e-4 * abs(ref), (l1, ref)

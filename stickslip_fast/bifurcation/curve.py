@@ -69,7 +69,7 @@ def continue_bifurcation(
     atol: float = 1e-13,
     fd_step: float = 1e-7,
     h: float = 1e-7,
-    lyap_step: float = 1e-4,
+    lyap_step: float | None = None,
 ) -> Curve:
     """Follow a fold or period-doubling of periodic orbits, or a fold or Hopf point of
     equilibria, in a second parameter.
@@ -100,9 +100,11 @@ def continue_bifurcation(
     h : float
         Step of the directional difference of the Jacobian (the test functions'
         gradients; docs/orbits.md, "Two-parameter curves").
-    lyap_step : float
+    lyap_step : float, optional
         Equilibria, Hopf curves: step of the differences of the Jacobian in the
-        state for the first Lyapunov coefficient (the "bautin" test).
+        state for the first Lyapunov coefficient (the "bautin" test). Default
+        0.01 ``eps``: the friction law varies on the scale eps (at the DC motor's
+        Hopf point l1 = 1.2464e8 with steps 1e-6 to 1e-8, 1.8e9 with 1e-4).
 
     Returns
     -------
@@ -119,7 +121,8 @@ def continue_bifurcation(
     if branch.period == 0:
         return continue_equilibrium_curve(branch, bifurcation, param2, (lo, hi), system0,
                                           direction=direction, h=h, fd_step=fd_step,
-                                          lyap_step=lyap_step, **settings)  # fmt: skip
+                                          lyap_step=lyap_step or 0.01 * system0.eps,
+                                          **settings)  # fmt: skip
     return _orbit_curve(branch, bifurcation, param2, (lo, hi), system0, direction,
                         (rtol, atol, fd_step, h), settings)  # fmt: skip
 
