@@ -80,6 +80,16 @@ def test_continue_table_takes_the_issue_28_keys(tmp_path):
     assert c["bounds2"] == (-0.9, -0.7) and c["direction2"] == -1.0
 
 
+def test_param2_for_an_equilibrium_continuation(tmp_path):
+    # the curves of an equilibrium branch's folds and Hopf points (tests/test_eqcurve.py)
+    text = ("[continue]\nparam = 'beta'\nbounds = [0.001, 0.02]\nstart = 'sliding'\n"
+            "param2 = 'eta'\nbounds2 = [1.5, 2.5]")  # fmt: skip
+    c = load_config(_write(tmp_path, text)).continuation
+    assert (c["start"], c["param2"], c["bounds2"]) == ("sliding", "eta", (1.5, 2.5))
+    with pytest.raises(ConfigError, match="param2"):
+        load_config(_write(tmp_path, text.replace("'eta'", "'n_oscillators'")))
+
+
 def test_paper_order_initial_condition_for_two_disks():
     # paper: (x1, x2, dx1, dx2, phi1, phi2, dphi1, dphi2)
     y = paper_order_to_state([1, 2, 3, 4, 5, 6, 7, 8], 2, vb=0.5)

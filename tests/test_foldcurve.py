@@ -100,3 +100,71 @@ def test_curve_file_round_trip(tmp_path):
         with h5py.File(tmp_path / "x.h5", "w") as h5:
             h5.attrs["kind"] = "branch"
         ssf.Curve.from_hdf5(tmp_path / "x.h5")
+
+
+def henon(x):
+    # (x, y) -> (1 - a x^2 + y, b x): period-doubling curve a = 3 (1 - b)^2 / 4, fold curve
+    # a = -(1 - b)^2 / 4; the multipliers' product is -b, so the second multiplier is b on
+    # the former (1:2 resonance at b = -1) and -b on the latter (1:1 resonance at b = -1)
+    u, v, a, b = x
+    A = np.array([[-2 * a * u, 1.0], [b, 0.0]])
+    G = np.array([1 - a * u * u + v - u, b * u - v])
+    return True, G, np.hstack([A - np.eye(2), [[-u * u, 0.0], [0.0, u]]]), A
+
+
+def _henon_start(b, kind):
+    u = 2 / (3 * (1 - b)) if kind == "period-doubling" else 2 / (1 - b)
+    a = (3 if kind == "period-doubling" else -1) * (1 - b) ** 2 / 4
+    return np.array([u + 1e-3, b * u, a - 1e-3, b])
+
+
+def test_period_doubling_curve_and_1_2_resonance_of_the_henon_map():
+    xs, mults, codim2, status, _ = follow_curve(
+        henon, _henon_start(0.3, "period-doubling"), "period-doubling", -1, (-1.5, 0.9), **KW
+    )
+    a, b = xs[:, 2], xs[:, 3]
+    assert status == "bounds" and b[-1] == -1.5
+    np.testing.assert_allclose(a, 0.75 * (1 - b) ** 2, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(xs[:, 0], 2 / (3 * (1 - b)), atol=1e-10)
+    # the multipliers: -1 and b
+    np.testing.assert_allclose(np.sort(mults.real, axis=1), np.c_[np.minimum(b, -1),
+                               np.maximum(b, -1)], atol=1e-8)  # fmt: skip
+    assert [k for k, _, _ in codim2] == ["1:2"], codim2
+    np.testing.assert_allclose(codim2[0][2][2:], [3.0, -1.0], atol=1e-8)
+
+
+def test_fold_curve_and_1_1_resonance_of_the_henon_map():
+    xs, _, codim2, status, _ = follow_curve(henon, _henon_start(0.3, "fold"), "fold", -1,
+                                            (-1.5, 0.9), **KW)  # fmt: skip
+    a, b = xs[:, 2], xs[:, 3]
+    assert status == "bounds"
+    np.testing.assert_allclose(a, -0.25 * (1 - b) ** 2, rtol=1e-11, atol=1e-12)
+    assert [k for k, _, _ in codim2] == ["1:1"], codim2
+    np.testing.assert_allclose(codim2[0][2][2:], [-1.0, -1.0], atol=1e-8)
+
+
+def fold_flip_map(x):
+    # (u, w) -> (u + a - u^2, -(1 + b + u) w + w^3) at w = 0: fold curve a = 0 (multipliers
+    # 1, -(1 + b)), period-doubling curve a = b^2 with u = -b (multipliers 1 + 2b, -1);
+    # both have a fold-flip point at a = b = 0 (its 1:2 point at b = -1, where A + I = 0, is
+    # degenerate: the Henon map's is tested above)
+    u, w, a, b = x
+    A = np.array([[1 - 2 * u, 0.0], [-w, -(1 + b + u) + 3 * w * w]])
+    G = np.array([a - u * u, -(2 + b + u) * w + w**3])
+    return True, G, np.hstack([A - np.eye(2), [[1.0, 0.0], [0.0, -w]]]), A
+
+
+def test_fold_flip_on_fold_and_period_doubling_curves():
+    xs, _, codim2, status, _ = follow_curve(fold_flip_map, np.array([1e-3, 0.0, 1e-4, 0.5]),
+                                            "fold", -1, (-1.0, 1.0), **KW)  # fmt: skip
+    np.testing.assert_allclose(xs[:, [0, 2]], 0.0, atol=1e-11)
+    assert [k for k, _, _ in codim2] == ["fold-flip"] and status == "bounds"
+    np.testing.assert_allclose(codim2[0][2][2:], 0.0, atol=1e-8)
+    # the period-doubling curve from b = -0.5 (u = 0.5, a = 0.25) towards b = +0.5
+    xs, _, codim2, status, _ = follow_curve(
+        fold_flip_map, np.array([0.5, 0.0, 0.25 + 1e-3, -0.5]), "period-doubling", 1,
+        (-1.2, 0.5), **KW)  # fmt: skip
+    np.testing.assert_allclose(xs[:, 2], xs[:, 3] ** 2, atol=1e-11)
+    np.testing.assert_allclose(xs[:, 0], -xs[:, 3], atol=1e-11)
+    assert [k for k, _, _ in codim2] == ["fold-flip"] and status == "bounds"
+    np.testing.assert_allclose(codim2[0][2][2:], 0.0, atol=1e-8)

@@ -40,3 +40,40 @@ def test_fold_curve_passes_through_one_parameter_folds():
         # stopped a few points past the fold (not along the whole unstable side)
         _, fold_k = _fold_branch(float(k12), float(eta_c) - 0.02, max_points=25)
         assert abs(fold_k.value - eta_c) < 1e-8, (k12, fold_k.value, eta_c)
+
+
+# a point of Fig. 6's period-2 orbit near its period-doubling at eta = 5.042952433
+# (tests/test_continuation.py)
+P2_ETA = 5.043198103554579
+P2_POINT = np.array([0.027234629670059556, 0.0, 0.12785148813700828, -0.0038733936156032087])
+
+
+def _period_doubling(eta, k12, z, lo, hi, max_points=12):
+    s = ssf.System.preset("asymmetric", eta=eta, k12=k12)
+    orbit = ssf.find_orbit(s, z, period=2)
+    assert orbit.converged, orbit
+    branch = ssf.continue_orbit(orbit, "eta", (lo, hi), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
+                                max_points=max_points, direction=-1)  # fmt: skip
+    pds = [b for b in branch.bifurcations if b.kind == "period-doubling"]
+    assert len(pds) == 1, branch.summary()
+    return branch, pds[0]
+
+
+def test_period_doubling_curve_passes_through_one_parameter_period_doublings():
+    # about 35 s warm: the curve (10 points, three tangent integrations per evaluation)
+    # and four one-parameter continuations of the period-2 orbit
+    branch, pd = _period_doubling(P2_ETA, -0.8, P2_POINT, 5.0428, 5.0433, max_points=8)
+    assert abs(pd.value - 5.042952433) < 1e-8
+    curve = ssf.continue_bifurcation(branch, pd, "k12", (-0.806, -0.79), direction=-1,
+                                     ds=0.002, ds_max=0.005, max_points=12)  # fmt: skip
+    assert curve.status == "bounds" and curve.values[-1, 1] == -0.806
+    assert curve.kind == "period-doubling" and curve.period == 2 and curve.codim2 == []
+    np.testing.assert_allclose(curve.values[0], [pd.value, -0.8], atol=1e-9)
+    # a multiplier at -1 all along (to the Jacobian's accuracy on this stiff orbit); the
+    # curve goes down in eta as k12 decreases
+    assert np.all(np.abs(curve.multipliers[:, 0] + 1) < 1e-3)
+    assert np.all(np.diff(curve.values[:, 0]) < 0)
+    for j in (len(curve.values) // 3, 2 * len(curve.values) // 3, -1):
+        eta_c, k12 = (float(v) for v in curve.values[j])
+        _, pd_k = _period_doubling(eta_c + 1e-4, k12, curve.points[j], eta_c - 1e-4, eta_c + 1e-4)
+        assert abs(pd_k.value - eta_c) < 1e-8, (k12, pd_k.value, eta_c)

@@ -1,4 +1,5 @@
-"""Two-parameter continuation of a fold or period-doubling of periodic orbits: ``Curve``.
+"""Two-parameter continuation of a fold or period-doubling of periodic orbits, or of a
+fold or Hopf point of equilibria (:mod:`.eqcurve`): ``Curve``.
 
 :func:`continue_bifurcation` starts from a bifurcation located on a one-parameter orbit
 branch (:func:`~stickslip_fast.continue_orbit`) and follows it in a second
@@ -9,109 +10,18 @@ equations and the parameter sensitivities, :func:`~stickslip_fast.bifurcation.re
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from ..base.messages import plain
 from ..model.system import SWEEPABLE
 from .branch import Bifurcation, Branch
+from .curverecord import Codim2Point, Curve
 from .detection import _sorted_eigs
+from .eqcurve import EQUILIBRIUM_CURVE_KINDS, continue_equilibrium_curve
 from .foldcurve import CURVE_KINDS, follow_curve
 from .returnmap import SECTION_INDEX, return_map
-
-
-@dataclass
-class Codim2Point:
-    """A codim-2 point on a :class:`Curve`: ``kind`` ("cusp" or "extremum"), ``values``
-    (the branch's parameter, ``param2``), ``index`` (the curve point before it) and
-    ``point`` (the orbit's state on the section there)."""
-
-    kind: str
-    values: np.ndarray
-    index: int
-    point: np.ndarray
-
-
-@dataclass
-class Curve:
-    """A curve of codim-1 points of periodic orbits in two parameters.
-
-    Attributes
-    ----------
-    system : System
-        The system of the start (at the start's values of both parameters).
-    param, param2 : str
-        The branch's parameter and the second one.
-    kind : str
-        The codim-1 kind followed: "fold" or "period-doubling".
-    period : int
-        Section crossings per period of the orbits.
-    values : ndarray, shape (k, 2)
-        (param, param2) along the curve.
-    points : ndarray, shape (k, n_state)
-        The orbit's state on the section at each point.
-    T : ndarray, shape (k,)
-        Period in time.
-    multipliers : ndarray of complex, shape (k, n_state - 1)
-        Floquet multipliers (one is +1 on a fold curve, -1 on a period-doubling curve).
-    codim2 : list of Codim2Point
-        "cusp": the curve's parameter-plane tangent vanishes; "extremum": the curve
-        turns back in ``param2`` (beyond it, at fixed ``param2``, the two folds met
-        and vanished).
-    status : str
-        How the curve ended (:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s
-        statuses, or "start-failed").
-    """
-
-    system: Any
-    param: str
-    param2: str
-    kind: str
-    period: int
-    values: np.ndarray
-    points: np.ndarray
-    T: np.ndarray
-    multipliers: np.ndarray
-    codim2: list[Codim2Point] = field(default_factory=list)
-    status: str = ""
-
-    def to_hdf5(self, path: str | Path) -> Path:
-        """Write the curve (schema: docs/file-format.md, "Curve files")."""
-        from ..io.curvefile import write_curve
-
-        return write_curve(path, {
-            "param": self.param, "param2": self.param2, "curve_kind": self.kind,
-            "period": int(self.period), "status": self.status,
-            "system": json.dumps(self.system.to_dict()), "values": self.values,
-            "points": self.points, "T": self.T, "multipliers_real": self.multipliers.real,
-            "multipliers_imag": self.multipliers.imag,
-            "codim2_kind": [c.kind for c in self.codim2],
-            "codim2_values": [c.values for c in self.codim2],
-            "codim2_index": [c.index for c in self.codim2],
-            "codim2_point": [c.point for c in self.codim2],
-        })  # fmt: skip
-
-    @classmethod
-    def from_hdf5(cls, path: str | Path) -> Curve:
-        """Read a curve file written by :meth:`to_hdf5` (ValueError for another file)."""
-        from ..io.curvefile import read_curve
-        from ..model.system import System
-
-        d = read_curve(path)
-        codim2 = [Codim2Point(k, np.array(v), int(i), np.array(p)) for k, v, i, p in
-                  zip(d["codim2_kind"], d["codim2_values"], d["codim2_index"], d["codim2_point"])]  # fmt: skip
-        return cls(
-            system=System.from_dict(json.loads(d["system"])), param=str(d["param"]),
-            param2=str(d["param2"]), kind=str(d["curve_kind"]), period=int(d["period"]),
-            values=d["values"], points=d["points"], T=d["T"],
-            multipliers=d["multipliers_real"] + 1j * d["multipliers_imag"], codim2=codim2,
-            status=str(d["status"]),
-        )  # fmt: skip
 
 
 def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
@@ -159,15 +69,19 @@ def continue_bifurcation(
     atol: float = 1e-13,
     fd_step: float = 1e-7,
     h: float = 1e-7,
+    lyap_step: float | None = None,
 ) -> Curve:
-    """Follow a fold or period-doubling of periodic orbits in a second parameter.
+    """Follow a fold or period-doubling of periodic orbits, or a fold or Hopf point of
+    equilibria, in a second parameter.
 
     Parameters
     ----------
     branch : Branch
-        An orbit branch from :func:`~stickslip_fast.continue_orbit`.
+        An orbit branch from :func:`~stickslip_fast.continue_orbit`, or an equilibrium
+        branch from :func:`~stickslip_fast.continue_equilibrium` (``period == 0``).
     bifurcation : Bifurcation
-        One of ``branch.bifurcations``, of kind "fold" or "period-doubling".
+        One of ``branch.bifurcations``, of kind "fold" or "period-doubling" (orbits),
+        "fold" or "hopf" (equilibria).
     param2 : str
         A :class:`System` field other than ``branch.param``.
     bounds2 : (float, float)
@@ -177,12 +91,20 @@ def continue_bifurcation(
         +1: start towards increasing ``param2``; -1: decreasing.
     ds, ds_min, ds_max, max_points, tol : float
         Of the pseudo-arclength continuation in (section coordinates, param,
-        param2); ``tol`` on the residual and the test function together.
+        param2) (equilibria: (state, param, param2), and omega^2 before the
+        parameters on a Hopf curve); ``tol`` on the residual and the test
+        functions together.
     rtol, atol, fd_step : float
-        Of the return map and its parameter sensitivities (:func:`continue_orbit`).
+        Of the return map and its parameter sensitivities (:func:`continue_orbit`);
+        equilibria: ``fd_step`` of the central differences in the parameters.
     h : float
-        Step of the directional difference of the Jacobian (the test function's
-        gradient; docs/orbits.md, "Two-parameter curves").
+        Step of the directional difference of the Jacobian (the test functions'
+        gradients; docs/orbits.md, "Two-parameter curves").
+    lyap_step : float, optional
+        Equilibria, Hopf curves: step of the differences of the Jacobian in the
+        state for the first Lyapunov coefficient (the "bautin" test). Default
+        0.01 ``eps``: the friction law varies on the scale eps (at the DC motor's
+        Hopf point l1 = 1.2464e8 with steps 1e-6 to 1e-8, 1.8e9 with 1e-4).
 
     Returns
     -------
@@ -191,19 +113,29 @@ def continue_bifurcation(
     Raises
     ------
     ValueError
-        For a branch of equilibria, a bifurcation of another kind or not on the
-        branch, an unknown or equal ``param2``, or bounds that do not contain the
+        For a bifurcation of another kind, an unknown or equal ``param2``, or bounds that do not contain the
         start (naming the argument).
     """
     kind, system0, lo, hi = _check(branch, bifurcation, param2, bounds2)
-    p = branch.period
+    settings = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol)
+    if branch.period == 0:
+        return continue_equilibrium_curve(branch, bifurcation, param2, (lo, hi), system0,
+                                          direction=direction, h=h, fd_step=fd_step,
+                                          lyap_step=lyap_step or 0.01 * system0.eps,
+                                          **settings)  # fmt: skip
+    return _orbit_curve(branch, bifurcation, param2, (lo, hi), system0, direction,
+                        (rtol, atol, fd_step, h), settings)  # fmt: skip
+
+
+def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings):
+    """:func:`continue_bifurcation` for an orbit branch (arguments checked)."""
+    rtol, atol, fd_step, h = steps
+    kind, p = bifurcation.kind, branch.period
     base, periods = _two_param_evaluator(system0, branch.param, param2, p, rtol, atol, fd_step)
     mask = np.arange(system0.n_state) != SECTION_INDEX
     x0 = np.r_[bifurcation.point[mask], bifurcation.value, getattr(system0, param2)]
-    xs, mults, codim2, status, _ = follow_curve(
-        base, x0, kind, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, h=h, spectrum=_sorted_eigs,
-    )  # fmt: skip
+    xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
+                                                spectrum=_sorted_eigs, **settings)  # fmt: skip
     n = system0.n_state
     if xs is None:
         xs, mults = x0[None, :], np.full((1, n - 1), np.nan, complex)
@@ -224,10 +156,12 @@ def continue_bifurcation(
 
 
 def _check(branch, bifurcation, param2, bounds2):
-    if not isinstance(branch, Branch) or branch.period < 1:
-        raise ValueError("branch must be an orbit Branch from continue_orbit (period >= 1)")
-    if not isinstance(bifurcation, Bifurcation) or bifurcation.kind not in CURVE_KINDS:
-        raise ValueError(f"bifurcation must be a Bifurcation of kind {sorted(CURVE_KINDS)}, "
+    if not isinstance(branch, Branch) or branch.period < 0:
+        raise ValueError("branch must be a Branch from continue_orbit or continue_equilibrium")
+    kinds = sorted(CURVE_KINDS) if branch.period else list(EQUILIBRIUM_CURVE_KINDS)
+    if not isinstance(bifurcation, Bifurcation) or bifurcation.kind not in kinds:
+        what = "an orbit" if branch.period else "an equilibrium"
+        raise ValueError(f"bifurcation must be a Bifurcation of kind {kinds} ({what} branch), "
                          f"got {getattr(bifurcation, 'kind', bifurcation)!r}")  # fmt: skip
     if param2 not in SWEEPABLE or param2 in (branch.param, "n_oscillators"):
         raise ValueError(f"param2 must be one of {sorted(SWEEPABLE)} other than "

@@ -23,6 +23,7 @@ a = b = 0).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -95,6 +96,40 @@ def curve_tests(A, t: np.ndarray) -> dict[str, float]:
     return {"turn-1": float(t[-2]), "turn-2": float(t[-1])}
 
 
+def _others(values: np.ndarray, target: complex, k: int = 1) -> np.ndarray:
+    """``values`` without the ``k`` entries nearest ``target`` (the critical ones)."""
+    order = np.argsort(np.abs(values - target), kind="stable")
+    return values[order[k:]]
+
+
+def _product(values: np.ndarray) -> float:
+    """prod(values).real, as +-1 or +-inf times its magnitude (only its sign is used)."""
+    return float(np.prod(values).real) if values.size else math.nan
+
+
+#: The codim-2 points on the curves of maps' fixed points: the remaining multipliers'
+#: products prod(mu - 1) and prod(mu + 1) (a complex pair contributes |mu -+ 1|^2 > 0, so
+#: they change sign only where a real multiplier passes +1 or -1).
+MAP_CODIM2 = {"fold": (("1:1", 1.0), ("fold-flip", -1.0)),
+              "period-doubling": (("fold-flip", 1.0), ("1:2", -1.0))}  # fmt: skip
+
+
+def map_curve_tests(kind: str) -> Callable:
+    """Tests along a fold (+1) or period-doubling (-1) curve of a map's fixed points: the
+    turns of :func:`curve_tests` and the second multiplier at +1 or -1
+    (:data:`MAP_CODIM2`; A is the map's Jacobian)."""
+    critical = 1.0 if kind == "fold" else -1.0
+
+    def tests(A, t):
+        rest = _others(np.linalg.eigvals(A), critical)
+        out = curve_tests(A, t)
+        for name, target in MAP_CODIM2[kind]:
+            out[name] = _product(rest - target)
+        return out
+
+    return tests
+
+
 def follow_curve(
     base: Callable,
     x0: np.ndarray,
@@ -102,20 +137,15 @@ def follow_curve(
     direction: float,
     bounds2: tuple[float, float],
     *,
-    ds: float,
-    ds_min: float,
-    ds_max: float,
-    max_points: int,
-    tol: float,
     h: float = 1e-7,
-    spectrum: Callable | None = None,
-    locate_tol: float = 1e-9,
+    tests: Callable | None = None,
+    **settings,
 ):
-    """Follow a codim-1 curve through x0 = (z, l1, l2), a point near it.
+    """Follow a fold or period-doubling curve through x0 = (z, l1, l2), a point near it.
 
-    x0 is first corrected onto the curve at fixed l2. Returns (xs, mults, codim2, status,
-    x_start) with codim2 a list of (kind, index, x); ``status`` as
-    :func:`pseudo_arclength`'s, or "start-failed" (x0 could not be corrected).
+    ``tests``: the codim-2 test functions (default :func:`map_curve_tests` of ``kind``).
+    ``settings``: ds, ds_min, ds_max, max_points, tol (required), spectrum, locate_tol of
+    :func:`run_curve`. Returns (xs, mults, codim2, status, x_start) as :func:`run_curve`.
     """
     n_z = x0.size - 2
     ok, G, DG, _ = base(x0)
@@ -126,6 +156,34 @@ def follow_curve(
     if not ok:
         return None, None, [], "start-failed", x0
     evaluate = augmented(base, n_z, kind, b, c, h, 1.0 / max(float(np.linalg.norm(DF[-1])), 1e-300))
+    return run_curve(evaluate, x0, direction, bounds2, tests=tests or map_curve_tests(kind),
+                     **settings)  # fmt: skip
+
+
+def run_curve(
+    evaluate: Callable,
+    x0: np.ndarray,
+    direction: float,
+    bounds2: tuple[float, float],
+    *,
+    ds: float,
+    ds_min: float,
+    ds_max: float,
+    max_points: int,
+    tol: float,
+    tests: Callable = curve_tests,
+    spectrum: Callable | None = None,
+    locate_tol: float = 1e-9,
+):
+    """Continue the augmented system ``evaluate`` from x0 (corrected first at fixed l2, the
+    last coordinate; l1 is the one before it) and name the codim-2 points.
+
+    Sign changes of "turn-1"/"turn-2" are a "cusp" where both parameter components of the
+    tangent are below :data:`CUSP_SPEED`, else "turn-2" is an "extremum" (and "turn-1"
+    nothing); every other test's sign change is a codim-2 point of the test's name.
+    Returns (xs, mults, codim2, status, x_start) with codim2 a list of (kind, index, x);
+    ``status`` as :func:`pseudo_arclength`'s, or "start-failed" (x0 could not be corrected).
+    """
     e2 = np.zeros_like(x0)
     e2[-1] = 1.0
     okc, x_start, _, _ = _correct(evaluate, x0, e2, x0, tol, 12)
@@ -133,11 +191,14 @@ def follow_curve(
         return None, None, [], "start-failed", x0
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x_start, direction, bounds2, ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, locate_tol=locate_tol, tests=curve_tests,
+        max_points=max_points, tol=tol, locate_tol=locate_tol, tests=tests,
         spectrum=spectrum,
     )  # fmt: skip
     codim2 = []
     for name, _, index, x in bifs:
+        if name not in ("turn-1", "turn-2"):
+            codim2.append((name, index, x))
+            continue
         ok, _, DF, _ = evaluate(x)
         t = _tangent(DF, xs[index + 1] - xs[index]) if ok else np.full(x.size, np.nan)
         if abs(t[-1]) < CUSP_SPEED and abs(t[-2]) < CUSP_SPEED:

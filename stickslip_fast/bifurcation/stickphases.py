@@ -81,7 +81,11 @@ def stick_phases(
             raise ValueError(
                 f"the orbit could not be sampled over one period (status {r.status!r})"
             )
-    y = np.concatenate(ys)
+    return _phase_durations(system, np.concatenate(ys), T, dt, threshold)
+
+
+def _phase_durations(system: System, y: np.ndarray, T: float, dt: float, threshold: float):
+    """The stick phases' durations in the samples y (one period, step dt), disk by disk."""
     n = system.n_oscillators
     vb = y[:, -1] if system.is_dc_motor else np.full(len(y), system.vb)
     out = []

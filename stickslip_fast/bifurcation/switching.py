@@ -9,9 +9,11 @@ import numpy as np
 
 from .arclength import Evaluator, _correct
 from .branch import Bifurcation, Branch
+from .multishoot import DEFAULT_SEGMENTS
 from .orbit_branch import _orbit_evaluator
 from .orbits import (
     SECTION_INDEX,
+    SHOOTING_MODES,
     Orbit,
     find_orbit,
     return_map,
@@ -79,6 +81,8 @@ def switch_branch(
     rtol: float = 1e-11,
     atol: float = 1e-13,
     fd_step: float = 1e-7,
+    shooting: str = "single",
+    segments: int = DEFAULT_SEGMENTS,
 ) -> Orbit:
     """The period-doubled orbit born at a period-doubling point of an orbit branch.
 
@@ -94,6 +98,16 @@ def switch_branch(
         The first that gives a fixed point of P^2p that is not one of P^p wins.
     tol, rtol, atol, fd_step
         As for :func:`continue_orbit`.
+    shooting : {"single", "multiple", "auto"}
+        How the doubled orbit is polished (:func:`find_orbit`): "multiple" gives an
+        orbit whose multipliers come from the segments' factors, to be continued
+        with ``continue_orbit(..., shooting="multiple")`` where the doubled
+        branch is strongly unstable; "auto": single, multiple where single
+        shooting reaches its precision limit. The start along the -1
+        eigenvector is corrected by single shooting (a step of size ``delta``
+        from the period-doubling point) in every mode.
+    segments : int
+        m >= 1, the segments of multiple shooting.
 
     Returns
     -------
@@ -109,8 +123,67 @@ def switch_branch(
     ------
     ValueError
         For a branch of equilibria, a bifurcation that is not a period-doubling
-        of this branch, or non-positive deltas (naming the argument).
+        of this branch, non-positive deltas, an unknown ``shooting`` or a bad
+        ``segments`` (naming the argument).
     """
+    bifurcation = _check_switch(branch, bifurcation, deltas, shooting, segments)
+    p = branch.period
+    mask = np.arange(branch.system.n_state) != SECTION_INDEX
+    lam_pd = float(bifurcation.value)
+    z_pd = np.asarray(bifurcation.point, dtype=float)
+    s_pd = dataclasses.replace(branch.system, **{branch.param: lam_pd})
+    v = _minus_one_vector(s_pd, z_pd, p, rtol, atol)
+    evaluate2, full, system_at, _ = _orbit_evaluator(branch.system, branch.param, 2 * p, rtol,
+                                                     atol, fd_step)  # fmt: skip
+    x_pd = np.r_[z_pd[mask], lam_pd]
+    polish = dict(tol=tol, rtol=rtol, atol=atol, shooting=shooting, segments=int(segments))
+    last, tried = None, []
+    for delta in deltas:
+        ok, x = period_doubling_start(evaluate2, x_pd, v, delta, tol=tol)
+        tried.append(delta)
+        if not ok or _is_period_p(system_at(x[-1]), full(x), p, mask, delta * np.max(
+                np.abs(v / np.linalg.norm(v))), rtol, atol):  # fmt: skip
+            continue
+        last = find_orbit(system_at(x[-1]), full(x), 2 * p, **polish)
+        if last.converged:
+            return last
+    return _no_doubled_orbit(last, s_pd, z_pd, p, tried, tol, rtol, atol)
+
+
+def _minus_one_vector(s_pd, z_pd, p, rtol, atol) -> np.ndarray:
+    """The eigenvector of D P^p(z_pd) for the multiplier nearest -1 (real part)."""
+    st, _, _, jac = return_map(s_pd, z_pd, p, rtol=rtol, atol=atol)
+    if st != "ok":
+        raise ValueError(f"the return map fails at the bifurcation point: {st}")
+    mu, vecs = np.linalg.eig(jac)
+    return np.real(vecs[:, int(np.argmin(np.abs(mu + 1.0)))])
+
+
+def _no_doubled_orbit(last, s_pd, z_pd, p, tried, tol, rtol, atol) -> Orbit:
+    """The unconverged Orbit :func:`switch_branch` returns when no offset worked."""
+    if last is None:
+        last = find_orbit(s_pd, z_pd, 2 * p, tol=tol, rtol=rtol, atol=atol, max_iter=0)
+    last.converged = False
+    last.stable = False
+    last.message = (
+        f"no period-{2 * p} orbit found along the -1 eigenvector (offsets tried: "
+        f"{', '.join(f'{d:g}' for d in tried)})"
+    )
+    if last.status == "converged":
+        last.status = "no-progress"
+    return last
+
+
+def _is_period_p(s, z, p, mask, offset, rtol, atol) -> bool:
+    """A fixed point of P^p (or a failed map) at z: the hyperplane of
+    :func:`period_doubling_start` holds one too, but the doubled orbit's P^p image is its
+    other half, ~2 ``offset`` away."""
+    st_p, pts_p, _, _ = return_map(s, z, p, tangents=False, rtol=rtol, atol=atol)
+    return st_p != "ok" or np.max(np.abs(pts_p[-1][mask] - z[mask])) < 0.5 * offset
+
+
+def _check_switch(branch, bifurcation, deltas, shooting, segments) -> Bifurcation:
+    """:func:`switch_branch`'s arguments, checked; returns the Bifurcation."""
     if not isinstance(branch, Branch) or branch.period < 1:
         raise ValueError("branch must be a Branch of periodic orbits (continue_orbit)")
     if isinstance(bifurcation, (int, np.integer)) and not isinstance(bifurcation, bool):
@@ -126,49 +199,8 @@ def switch_branch(
     if not deltas or not all(isinstance(d, (int, float)) and math.isfinite(d) and d > 0
                              for d in deltas):  # fmt: skip
         raise ValueError(f"deltas must be finite numbers > 0, got {deltas!r}")
-    p = branch.period
-    system0 = branch.system
-    n = system0.n_state
-    mask = np.arange(n) != SECTION_INDEX
-    lam_pd = float(bifurcation.value)
-    z_pd = np.asarray(bifurcation.point, dtype=float)
-    s_pd = dataclasses.replace(system0, **{branch.param: lam_pd})
-    st, _, _, jac = return_map(s_pd, z_pd, p, rtol=rtol, atol=atol)
-    if st != "ok":
-        raise ValueError(f"the return map fails at the bifurcation point: {st}")
-    mu, vecs = np.linalg.eig(jac)
-    k = int(np.argmin(np.abs(mu + 1.0)))
-    v = np.real(vecs[:, k])
-    evaluate2, full, system_at, _ = _orbit_evaluator(system0, branch.param, 2 * p, rtol, atol,
-                                                     fd_step)  # fmt: skip
-    x_pd = np.r_[z_pd[mask], lam_pd]
-    last = None
-    tried = []
-    for delta in deltas:
-        ok, x = period_doubling_start(evaluate2, x_pd, v, delta, tol=tol)
-        tried.append(delta)
-        if not ok:
-            continue
-        s = system_at(x[-1])
-        z = full(x)
-        st_p, pts_p, _, _ = return_map(s, z, p, tangents=False, rtol=rtol, atol=atol)
-        # a fixed point of P^p lies on the hyperplane too: the doubled orbit's P^p image is
-        # its other half, ~2 delta away
-        if st_p != "ok" or np.max(np.abs(pts_p[-1][mask] - z[mask])) < 0.5 * delta * np.max(
-            np.abs(v / np.linalg.norm(v))
-        ):
-            continue
-        last = find_orbit(s, z, 2 * p, tol=tol, rtol=rtol, atol=atol)
-        if last.converged:
-            return last
-    if last is None:
-        last = find_orbit(s_pd, z_pd, 2 * p, tol=tol, rtol=rtol, atol=atol, max_iter=0)
-    last.converged = False
-    last.stable = False
-    last.message = (
-        f"no period-{2 * p} orbit found along the -1 eigenvector (offsets tried: "
-        f"{', '.join(f'{d:g}' for d in tried)})"
-    )
-    if last.status == "converged":
-        last.status = "no-progress"
-    return last
+    if shooting not in SHOOTING_MODES:
+        raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
+    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
+        raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
+    return bifurcation

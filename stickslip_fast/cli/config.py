@@ -53,7 +53,7 @@ Layout (every section optional except what the command needs)::
     direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
     # shooting = "single"|"multiple"|"auto", segments   (multiple shooting)
-    # param2, bounds2, direction2   (the folds' and period-doublings' curves in a 2nd parameter)
+    # param2, bounds2, direction2   (the codim-1 points' curves in a 2nd parameter)
     # switch = true       # also follow the doubled orbit from each period-doubling found
     # sharp_ends = false  # do not retry with tighter settings where the corrector fails
 
@@ -422,7 +422,8 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
 
 def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
     """[continue].shooting / segments (multiple shooting) and param2 / bounds2 / direction2
-    (the two-parameter curves of the branch's folds and period-doublings), into ``out``."""
+    (the two-parameter curves of the branch's folds and period-doublings, or of an
+    equilibrium branch's folds and Hopf points), into ``out``."""
     orbit = out.get("start", "orbit") == "orbit"
     if "shooting" in table:
         if table["shooting"] not in ("single", "multiple", "auto") or not orbit:
@@ -439,9 +440,9 @@ def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
             raise ConfigError("[continue].bounds2 and direction2 need param2")
         return
     p2, b2 = table["param2"], table.get("bounds2")
-    if not orbit or not isinstance(p2, str) or p2 not in SWEEPABLE or p2 == out["param"]:
+    if not isinstance(p2, str) or p2 not in SWEEPABLE or p2 in (out["param"], "n_oscillators"):
         raise ConfigError(f"[continue].param2 must be one of {list(SWEEPABLE)} other than param "
-                          f"(start = 'orbit' only), got {p2!r}")  # fmt: skip
+                          f"and n_oscillators, got {p2!r}")  # fmt: skip
     if not (isinstance(b2, list) and len(b2) == 2
             and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in b2)):  # fmt: skip
         raise ConfigError(f"[continue].bounds2 must be a list of two numbers, got {b2!r}")

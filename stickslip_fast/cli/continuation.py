@@ -56,14 +56,16 @@ def _cmd_continue(args: argparse.Namespace) -> int:
 
 
 def _curves(branch, curve, tol, args, say):
-    """[continue].param2: every fold and period-doubling of ``branch`` followed in param2,
-    into OUTPUT's stem + ``.curve<k>.h5``."""
+    """[continue].param2: every fold and period-doubling of an orbit ``branch`` (every fold
+    and Hopf point of an equilibrium branch) followed in param2, into OUTPUT's stem +
+    ``.curve<k>.h5``."""
     from ..bifurcation.curve import continue_bifurcation
 
     out = Path(args.output)
-    bifs = [b for b in branch.bifurcations if b.kind in ("fold", "period-doubling")]
+    kinds = ("fold", "period-doubling") if branch.period else ("fold", "hopf")
+    bifs = [b for b in branch.bifurcations if b.kind in kinds]
     if not bifs:
-        say("param2: the branch has no fold or period-doubling")
+        say(f"param2: the branch has no {' or '.join(kinds)}")
     for k, bif in enumerate(bifs, start=1):
         say(
             f"following the {bif.kind} at {branch.param} = {bif.value:.10g} in {curve['param2']} ..."
@@ -89,7 +91,9 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
         say("switch: the branch has no period-doubling")
     for k, pd in enumerate(pds, start=1):
         say(f"switching at the period-doubling at {branch.param} = {pd.value:.10g} ...")
-        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10))
+        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10),
+                              shooting=settings.get("shooting", "single"),
+                              **{k: settings[k] for k in ("segments",) if k in settings})  # fmt: skip
         if not orbit.converged:
             print(f"period-doubling {k} at {pd.value:.10g}: {orbit.message}", file=sys.stderr)
             continue

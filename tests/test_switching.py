@@ -1,0 +1,50 @@
+"""Branch switching with multiple shooting (issue 28, item 1): the period-4 orbit born at
+the subcritical period-doubling of Fig. 6's period-2 orbit (eta = 5.042952433), polished by
+multiple shooting, equals the single-shooting one, and its branch goes on by multiple
+shooting. About 30 s warm."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+
+P2_ETA = 5.043198103554579
+P2_POINT = np.array([0.027234629670059556, 0.0, 0.12785148813700828, -0.0038733936156032087])
+
+
+@pytest.fixture(scope="module")
+def p2_branch():
+    o2 = ssf.find_orbit(ssf.System.preset("asymmetric", eta=P2_ETA), P2_POINT, period=2)
+    br = ssf.continue_orbit(o2, "eta", (5.0428, 5.0433), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
+                            max_points=8, direction=-1)  # fmt: skip
+    return br, [b for b in br.bifurcations if b.kind == "period-doubling"][0]
+
+
+def test_switch_by_multiple_shooting_equals_single_and_continues(p2_branch):
+    br, pd = p2_branch
+    single = ssf.switch_branch(br, pd)
+    multi = ssf.switch_branch(br, pd, shooting="multiple", segments=8)
+    assert single.converged and multi.converged and multi.period == 4
+    assert multi.system == single.system  # the same corrected start
+    np.testing.assert_allclose(multi.points, single.points, atol=1e-9)
+    assert abs(multi.T - single.T) < 1e-8
+    # the multipliers from the segments' factors (periodic QR) against the one-piece
+    # Jacobian's (they differ by 7.6e-6: the variational Jacobian's accuracy on this
+    # stiff orbit, as on the period-doubling curve, docs/orbits.md)
+    np.testing.assert_allclose(multi.multipliers[0], single.multipliers[0], rtol=3e-5)
+    assert 1.0 < abs(multi.multipliers[0]) < 1.1 and not multi.stable
+    away = float(np.sign(multi.system.eta - pd.value))
+    doubled = ssf.continue_orbit(multi, "eta", (5.0428, 5.0433), direction=away, ds=1e-6,
+                                 ds_max=4e-6, max_points=5, shooting="multiple", segments=8)  # fmt: skip
+    assert len(doubled.values) == 5 and doubled.period == 4
+    assert np.all(np.diff(doubled.values) * away > 0)
+
+
+def test_switch_rejects_bad_shooting(p2_branch):
+    br, pd = p2_branch
+    with pytest.raises(ValueError, match="shooting"):
+        ssf.switch_branch(br, pd, shooting="double")
+    with pytest.raises(ValueError, match="segments"):
+        ssf.switch_branch(br, pd, shooting="multiple", segments=0)
