@@ -56,7 +56,10 @@ def summary(name: str, br, seconds: float) -> dict:
         "T": [float(v) for v in br.T],
         "leading_multiplier": [float(v) for v in lead],
     }
-    print(json.dumps({k: v for k, v in out.items() if k not in ("eta", "T", "leading_multiplier")}), flush=True)
+    print(
+        json.dumps({k: v for k, v in out.items() if k not in ("eta", "T", "leading_multiplier")}),
+        flush=True,
+    )
     return out
 
 

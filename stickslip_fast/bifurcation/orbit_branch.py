@@ -376,8 +376,9 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
         evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
         max_points=max_points, tol=tol, jump=jump, refine=refine,
     )  # fmt: skip
-    T = _return_times(xs, periods, lambda x: return_map(system_at(x[-1]), full(x), p,
-                                                         tangents=False, **kw)[2][-1])
+    T = _return_times(
+        xs, periods, lambda x: return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)[2][-1]
+    )
     xs, mults, T, status = _cut_at_period_jump(xs, mults, T, bifs, status)
     if status == "nonsmooth":
         # the fixed point of P^p ends: its return time jumps (a crossing of the section
