@@ -147,6 +147,18 @@ def test_auto_labels_equal_rodas5p_over_a_sweep():
     assert np.nanmax(np.abs(a.points[ok] - r.points[ok])) < 1e-5
 
 
+def test_auto_on_two_disks_with_a_dc_motor_matches_rodas5p():
+    """The generic (bordered) kernel: N = 2 on a DC motor."""
+    system = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=2, eta=1.5)
+    kw = dict(rtol=1e-9, atol=1e-11)
+    a = ssf.simulate(system, 600.0, 400.0, method="auto", **kw)
+    r = ssf.simulate(system, 600.0, 400.0, method="rodas5p", **kw)
+    assert a.status == r.status == "ok" and a.period == r.period
+    assert len(a.t_poincare) == len(r.t_poincare) > 10
+    assert np.max(np.abs(a.poincare - r.poincare)) < 1e-6
+    assert a.switching["to_stiff"] > 0 and a.switching["to_explicit"] > 0
+
+
 def test_auto_settings():
     system = ssf.System.preset("asymmetric")
     with pytest.raises(ValueError, match="not used by 'auto'"):
