@@ -85,6 +85,9 @@ def test_first_simulate_compiles_one_method_family(tmp_path):
     # none of the Rosenbrock machinery (stages, Jacobian, factorisation) was compiled
     rosenbrock = [(name, args[:80]) for _, name, args in compiled if "RosenbrockMethod" in args]
     assert rosenbrock == []
+    # nor the switching method of method="auto" (a family of its own, compiled on demand)
+    assert not any("AutoMethod" in args or "AutoWorkspace" in args for _, _, args in compiled)
+    assert not any(mod.endswith("autoswitch") for mod, _, _ in compiled)
     assert not any(name.startswith(("_small_", "jacobian_blocks")) for _, name, _ in compiled)
     # the method index must belong to the variant's family, else an error, never a run
     assert rec["mismatch"] == ST_ERROR

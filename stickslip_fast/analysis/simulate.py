@@ -9,6 +9,7 @@ import numpy as np
 
 from ..base.docs import fill_doc
 from ..base.interrupt import call_interruptible, new_abort_flag
+from ..core.autoswitch import AUTO_STATS
 from ..core.poincare import MAX_PERIOD, STATUS_NAMES, detect_period
 from ..core.results import SimulationResult
 from ..core.settings import (
@@ -31,6 +32,7 @@ from ..core.trajectory import (
     I_REJECTED,
     I_SAMPLES,
     I_STEPS,
+    I_TO_STIFF,
     METHODS,
     N_STAT_F,
     N_STAT_I,
@@ -59,13 +61,17 @@ WORKSPACE_VECTORS = 64
 
 #: The ``method``, ``rtol``, ``atol`` and ``h`` entries of the docstrings (numpydoc).
 METHOD_PARAMS_DOC = """
-    method : {"rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2"}
+    method : {"rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2", "auto"}
         ``"rodas5p"`` (default): L-stable Rosenbrock-Wanner, order 5(4), for the
         stiff sticking phases. ``"dopri5"``: adaptive Dormand-Prince 5(4) with PI
         control. ``"dopri5-fixed"``: Dormand-Prince with the fixed step ``h``.
         ``"rodas4p"``, ``"rodas4p2"``: 6-stage Rosenbrock-Wanner 4(3) methods;
         cheaper per step but slower than ``"rodas5p"`` at every accuracy
-        measured (docs/model.md).
+        measured (docs/model.md). ``"auto"``: Dormand-Prince while the motion is
+        non-stiff, Rodas5P while it is stiff (a disk sticks, or near a
+        stick-slip switch), switched by stiffness estimates; the switches and
+        each method's steps are in ``result.switching`` (docs/performance.md,
+        "Stiffness-aware switching").
     rtol, atol : float, optional
         Tolerances of the adaptive methods (defaults 1e-9 and 1e-11; rtol at most 1e-2).
     h : float, optional
@@ -264,4 +270,9 @@ def _result(
         t=t,
         y=y,
         settings=s,
+        switching=(
+            {k: int(stat_i[I_TO_STIFF + j]) for j, k in enumerate(AUTO_STATS)}
+            if s.method == "auto"
+            else None
+        ),
     )

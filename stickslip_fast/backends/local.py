@@ -24,6 +24,8 @@ from ..core.poincare import MAX_PERIOD
 from ..core.settings import STOP_KINDS, Settings
 from ..core.sweep_kernels import continuation_chunk, sweep_chunk
 from ..core.trajectory import (
+    AUTO_TOKEN,
+    M_AUTO,
     METHODS,
     SWEEP_INT_FIELDS,
     kernel_variant,
@@ -63,8 +65,11 @@ def _kernel_args(system: System, s: Settings) -> tuple:
     n_osc, dc = system.n_oscillators, system.is_dc_motor
     # trajectory.method_variant, through this module's kernel_variant (which
     # benchmarks/converged.py swaps for the generic kernel)
-    explicit = method_variant(METHODS.index(s.method), n_osc, dc) is None
-    return n_osc, dc, None if explicit else kernel_variant(n_osc, dc), rs, s.max_points
+    m = METHODS.index(s.method)
+    variant = None if method_variant(m, n_osc, dc) is None else kernel_variant(n_osc, dc)
+    if m == M_AUTO:
+        variant = variant + AUTO_TOKEN
+    return n_osc, dc, variant, rs, s.max_points
 
 
 def _checked(res: tuple) -> tuple:

@@ -19,7 +19,7 @@ Layout (every section optional except what the command needs)::
     [integration]
     t_end = 3000.0
     t_transient = 2000.0
-    method = "rodas5p"    # rodas5p | dopri5 | dopri5-fixed | rodas4p | rodas4p2
+    method = "rodas5p"    # rodas5p | dopri5 | dopri5-fixed | rodas4p | rodas4p2 | auto
     rtol = 1e-9
     atol = 1e-11
     # h = 1e-5            # fixed step (dopri5-fixed)

@@ -59,6 +59,10 @@ class SimulationResult:
         Uniform samples from t_transient every ``sample_dt`` (when requested).
     settings : Settings
         The validated integration settings of the run.
+    switching : dict or None
+        With ``method="auto"``: ``to_stiff`` and ``to_explicit`` (switches each
+        way), ``steps_explicit`` and ``steps_rosenbrock`` (accepted steps of each
+        method); None for the other methods.
     """
 
     system: System
@@ -79,6 +83,7 @@ class SimulationResult:
     t: np.ndarray | None = None
     y: np.ndarray | None = None
     settings: Settings | None = None
+    switching: dict | None = None
 
     def column(self, name: str) -> np.ndarray:
         """Poincare coordinate ``name`` (e.g. "x1", "phi1") of every point."""

@@ -230,6 +230,8 @@ class Settings:
             raise ValueError("method 'dopri5-fixed' needs a step size h")
         if self.method == "dopri5" and self.h != 0.0:
             raise ValueError("h is not used by the adaptive 'dopri5'; use 'dopri5-fixed'")
+        if self.method == "auto" and self.h != 0.0:
+            raise ValueError("h is not used by 'auto' (adaptive steps, switching methods)")
 
     @classmethod
     def resolve(
@@ -263,6 +265,8 @@ class Settings:
         if h is not None:
             if method == "dopri5":
                 raise ValueError("h is not used by the adaptive 'dopri5'; use 'dopri5-fixed'")
+            if method == "auto":
+                raise ValueError("h is not used by 'auto' (adaptive steps, switching methods)")
             h = check_real("h", h)
             if max_steps is None:
                 max_steps = math.ceil(check_real("t_end", t_end) / h) + 1

@@ -15,6 +15,10 @@ problem: a namedtuple record, a linear workspace (:class:`DenseLinear`), and one
     y' = lam (y - sin t) + cos t, made autonomous with z = (y, t); from
     (0, 0) the exact solution is y = sin t (stiff for lam << -1). Methods
     that lose order on it show order reduction.
+:class:`VanDerPol`
+    y1' = y2, y2' = mu (1 - y1^2) y2 - y1: non-stiff for mu ~ 1; for mu >> 1
+    stiff along its slow branches and non-stiff in its fast jumps (the test
+    of ``method="auto"``, :func:`solve_test_problem_auto`). No closed form.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from numba.extending import overload
 
 from ..base.jit import JIT, OVERLOAD
 from ..model.linalg import dense_w_factor, dense_w_solve
+from .autoswitch import AUTO_METHOD, N_AUTO_FLAGS, N_AUTO_STATS
 from .driver import STOP_AT_END, Controls, PoincareObserver, Section, drive, simple_stop
 from .problems import (
     error_norm,
@@ -41,7 +46,15 @@ from .problems import (
 )
 from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, alloc_workspace
 
-__all__ = ["LinearProblem", "Kaps", "ProtheroRobinson", "DenseLinear", "solve_test_problem"]
+__all__ = [
+    "LinearProblem",
+    "Kaps",
+    "ProtheroRobinson",
+    "VanDerPol",
+    "DenseLinear",
+    "solve_test_problem",
+    "solve_test_problem_auto",
+]
 
 _JIT = JIT
 _OVL = OVERLOAD
@@ -49,10 +62,11 @@ _OVL = OVERLOAD
 LinearProblem = namedtuple("LinearProblem", ["A"])
 Kaps = namedtuple("Kaps", ["eps"])
 ProtheroRobinson = namedtuple("ProtheroRobinson", ["lam"])
+VanDerPol = namedtuple("VanDerPol", ["mu"])
 #: Dense Jacobian, its W = sigma I - J factors and pivots.
 DenseLinear = namedtuple("DenseLinear", ["jac", "lu", "piv"])
 
-_RECORDS = (LinearProblem, Kaps, ProtheroRobinson)
+_RECORDS = (LinearProblem, Kaps, ProtheroRobinson, VanDerPol)
 
 
 def _which(typ):
@@ -89,6 +103,13 @@ def _f(prob, y, out):
             out[1] = 1.0
 
         return impl
+    if cls is VanDerPol:
+
+        def impl(prob, y, out):
+            out[0] = y[1]
+            out[1] = prob.mu * (1.0 - y[0] * y[0]) * y[1] - y[0]
+
+        return impl
 
 
 @overload(problem_jac, **_OVL)
@@ -116,6 +137,15 @@ def _jac(prob, y, lin):
             lin.jac[0, 1] = -prob.lam * math.cos(y[1]) - math.sin(y[1])
             lin.jac[1, 0] = 0.0
             lin.jac[1, 1] = 0.0
+
+        return impl
+    if cls is VanDerPol:
+
+        def impl(prob, y, lin):
+            lin.jac[0, 0] = 0.0
+            lin.jac[0, 1] = 1.0
+            lin.jac[1, 0] = -2.0 * prob.mu * y[0] * y[1] - 1.0
+            lin.jac[1, 1] = prob.mu * (1.0 - y[0] * y[0])
 
         return impl
 
@@ -184,3 +214,28 @@ def solve_test_problem(rosenbrock, prob, y0, t_end, rtol, atol, h_fixed, max_ste
             DOPRI5_METHOD, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort
         )
     return y, st, ns, nr, t
+
+
+@njit(**_JIT)
+def solve_test_problem_auto(prob, y0, t_end, rtol, atol, max_steps):
+    """Integrate a test problem with ``method="auto"`` (:mod:`.autoswitch`) on the driver.
+
+    Returns (final state, status, accepted steps, rejected steps, final time,
+    statistics: switches to stiff, to explicit, explicit and Rosenbrock steps).
+    """
+    y = y0.copy()
+    n = y.size
+    lin = DenseLinear(np.zeros((n, n)), np.zeros((n, n)), np.zeros(n, dtype=np.int64))
+    obs = PoincareObserver(
+        Section(0, True), 0.0, np.empty((0, n)), np.empty(0), np.empty((0, n)), 1.0,
+        np.empty(n), np.empty(n), np.zeros(2, dtype=np.int64),
+    )  # fmt: skip
+    istat = np.zeros(2, dtype=np.int64)
+    fstat = np.zeros(1)
+    ws = alloc_workspace(AUTO_METHOD, n)
+    st = drive(
+        AUTO_METHOD, prob, lin, ws, y, t_end, Controls(rtol, atol, 0.0, max_steps), obs,
+        simple_stop(STOP_AT_END, 0, 0), np.zeros(1, dtype=np.int64), istat, fstat,
+    )  # fmt: skip
+    stats = ws.flags[N_AUTO_FLAGS - N_AUTO_STATS :].copy()
+    return y, st, istat[0], istat[1], fstat[0], stats

@@ -15,7 +15,9 @@ a value starts as ``ST_NOT_COMPUTED`` so that a value that was never computed
 can never pass for a result.
 
 Every entry point takes ``variant`` (:func:`method_variant`): ``None`` for the
-explicit methods, else :func:`kernel_variant` (for one disk the Rosenbrock runs
+explicit methods, :func:`kernel_variant` plus :data:`AUTO_TOKEN` for
+``method="auto"`` (:mod:`.autoswitch`, a family of its own), else
+:func:`kernel_variant` (for one disk the Rosenbrock runs
 integrate :class:`~stickslip_fast.core.problems.StickSlipSmall`, the model with its
 sizes known at compile time). Its type picks the method family at compile time,
 so Numba compiles only the family and the variant a process uses: a first
@@ -35,6 +37,7 @@ from numba.extending import overload
 from ..base.jit import JIT, OVERLOAD, is_record
 from ..base.status import ST_ERROR, ST_OK
 from ..model.params import N_PARAMS, P_VB0
+from .autoswitch import AUTO_METHOD, N_AUTO_FLAGS, N_AUTO_STATS, AutoMethod
 from .driver import (
     S_T_CONVERGED,
     Controls,
@@ -65,10 +68,15 @@ from .steppers import (
     alloc_workspace,
 )
 
-METHODS = ("rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2")
+METHODS = ("rodas5p", "dopri5", "dopri5-fixed", "rodas4p", "rodas4p2", "auto")
 
 
-M_RODAS5P, M_DOPRI5, M_DOPRI5_FIXED, M_RODAS4P, M_RODAS4P2 = range(5)
+M_RODAS5P, M_DOPRI5, M_DOPRI5_FIXED, M_RODAS4P, M_RODAS4P2, M_AUTO = range(6)
+
+
+#: Appended to :func:`kernel_variant` for ``method="auto"``: a boolean last entry
+#: makes the switching method (:mod:`.autoswitch`) a family of its own.
+AUTO_TOKEN = (True,)
 
 
 _JIT = JIT
@@ -77,11 +85,13 @@ _JIT = JIT
 _PJIT = dict(parallel=True, cache=True, nogil=True, error_model="numpy")
 
 
-# slots of the integer and float statistics arrays
+# slots of the integer and float statistics arrays; I_TO_STIFF ... for method="auto"
+# (:data:`.autoswitch.AUTO_STATS`: switches each way, accepted steps of each method)
 I_STEPS, I_REJECTED, I_CROSSINGS, I_SAMPLES = range(4)
+I_TO_STIFF, I_TO_EXPLICIT, I_STEPS_EXPLICIT, I_STEPS_ROSENBROCK = range(4, 8)
 
 
-N_STAT_I = 4
+N_STAT_I = 8
 F_T_FINAL, F_AMPLITUDE, F_T_CONVERGED, F_REST_TIME = range(4)
 N_STAT_F = 4
 
@@ -188,7 +198,15 @@ def method_variant(method: int, n_osc: int, dc: bool) -> tuple | None:
     """
     if method in (M_DOPRI5, M_DOPRI5_FIXED):
         return None
+    if method == M_AUTO:
+        return kernel_variant(n_osc, dc) + AUTO_TOKEN
     return kernel_variant(n_osc, dc)
+
+
+def _is_auto(variant) -> bool:
+    """At compile time: is ``variant``'s type the token of method="auto" (a boolean last)?"""
+    tys = getattr(variant, "types", ())
+    return len(tys) > 0 and isinstance(tys[-1], types.Boolean)
 
 
 def method_record(method, variant):  # noqa: ARG001 - resolved by overload
@@ -199,6 +217,8 @@ def method_record(method, variant):  # noqa: ARG001 - resolved by overload
 def _method_record(method, variant):
     if isinstance(variant, types.NoneType):
         return lambda method, variant: DOPRI5_METHOD
+    if _is_auto(variant):
+        return lambda method, variant: AUTO_METHOD
     return lambda method, variant: _rosenbrock(method)
 
 
@@ -210,6 +230,8 @@ def method_matches(method, variant):  # noqa: ARG001 - resolved by overload
 def _method_matches(method, variant):
     if isinstance(variant, types.NoneType):
         return lambda method, variant: method == M_DOPRI5 or method == M_DOPRI5_FIXED
+    if _is_auto(variant):
+        return lambda method, variant: method == M_AUTO
     return lambda method, variant: (
         method == M_RODAS5P or method == M_RODAS4P or method == M_RODAS4P2
     )
@@ -233,6 +255,11 @@ def model_problem(method, prob, variant):  # noqa: ARG001 - resolved by overload
 @overload(model_problem, **OVERLOAD)
 def _model_problem(method, prob, variant):
     small = not isinstance(variant, types.NoneType) and len(variant) > 0
+    if is_record(method, AutoMethod):
+        # both methods of "auto" take the small record (its f is the generic one's arithmetic)
+        if len(variant) > 1:
+            return lambda method, prob, variant: make_small(prob, variant[:-1])
+        return lambda method, prob, variant: prob
     if is_record(method, RosenbrockMethod) and small:
         return lambda method, prob, variant: make_small(prob, variant)
     return lambda method, prob, variant: prob
@@ -246,6 +273,11 @@ def variant_matches(variant, n_osc, dc):  # noqa: ARG001 - resolved by overload
 def _variant_matches_impl(variant, n_osc, dc):
     if isinstance(variant, types.NoneType) or len(variant) == 0:
         return lambda variant, n_osc, dc: True
+    if _is_auto(variant):
+        if len(variant) == 1:
+            return lambda variant, n_osc, dc: True
+        v_osc, v_dc = shape_dims(types.Tuple(variant.types[:-1]))
+        return lambda variant, n_osc, dc: n_osc == v_osc and dc == v_dc
     v_osc, v_dc = shape_dims(variant)
     return lambda variant, n_osc, dc: n_osc == v_osc and dc == v_dc
 
@@ -281,6 +313,10 @@ def _run(
         abort, istat, fstat,
     )  # fmt: skip
     fstat[1] = stop.state[S_T_CONVERGED]
+    if ws.flags.size == N_AUTO_FLAGS and istat.size >= 2 + N_AUTO_STATS:
+        # method="auto" only (the others' flags hold one slot): switches, steps of each method
+        for k in range(N_AUTO_STATS):
+            istat[2 + k] = ws.flags[N_AUTO_FLAGS - N_AUTO_STATS + k]
     if status == ST_OK:
         t_final = fstat[0]
         vb_end = y[n - 1] if dc else 0.0
@@ -358,7 +394,9 @@ def integrate(
     ST_ERROR). Outputs: ``pts``/``tpts`` (ring
     buffer of the last Poincare points; see ``stat_i[I_CROSSINGS]`` for the
     total), ``samples`` (uniform grid from t_transient), ``y_end`` (state at the
-    last accepted time), ``stat_i`` (steps, rejected, crossings, samples) and
+    last accepted time), ``stat_i`` (steps, rejected, crossings, samples; with
+    ``N_STAT_I`` slots and method="auto" also switches to stiff and to explicit,
+    explicit and Rosenbrock steps, zero for the other methods) and
     ``stat_f`` (final time, the :func:`motion_measure` of the recording window,
     time of convergence, time at rest at the end: -1 if moving). With ``rs.stop_kind`` STOP_WHEN_CONVERGED the run
     ends once it has converged (see :func:`stoprules.converged_stop`). ``abort``
@@ -367,7 +405,7 @@ def integrate(
     n = y0.size
     obs = _make_observer(rs, pts, tpts, samples, sample_dt, n)
     stop = _stop_rule(rs, n_osc, dc, n)
-    istat = np.zeros(2, dtype=np.int64)
+    istat = np.zeros(2 + N_AUTO_STATS, dtype=np.int64)
     fstat = np.zeros(2)
     # the family is the variant's type: one driver compiled, not both. A method of
     # the other family runs on NaN parameters: _run's check returns ST_ERROR.
@@ -380,6 +418,9 @@ def integrate(
     stat_i[I_REJECTED] = istat[1]
     stat_i[I_CROSSINGS] = obs.counts[0]
     stat_i[I_SAMPLES] = obs.counts[1]
+    if stat_i.size >= N_STAT_I:
+        for k in range(N_AUTO_STATS):
+            stat_i[I_TO_STIFF + k] = istat[2 + k]
     stat_f[F_T_FINAL] = fstat[0]
     stat_f[F_AMPLITUDE] = motion_measure(obs.ymin, obs.ymax, n_osc, dc)
     stat_f[F_T_CONVERGED] = fstat[1]

@@ -1,0 +1,365 @@
+"""``method="auto"``: Dormand-Prince 5(4) while the motion is non-stiff, Rodas5P while it is stiff.
+
+The idea of LSODA and of OrdinaryDiffEq.jl's auto-switching solvers, on the
+engine's two order-5(4) methods. :data:`AUTO_METHOD` is a method record like
+those of :mod:`.steppers`, with its own overloads of the generic stepper
+functions, so :func:`.driver.drive` and every observer run it unchanged. Its
+workspace (:class:`AutoWorkspace`) carries the current mode:
+
+- **Explicit mode** (DOPRI5). After every step, Hairer's stiffness estimate
+  ``h rho`` with ``rho = |k7 - k6| / |y7 - y6|`` from the two stages at ``c = 1``
+  (Hairer, Norsett, Wanner I, Sec. IV.2 and ``dopri5.f``). An accepted step with
+  ``h rho >`` :data:`STIFF_HRHO` counts as stiff; :data:`TO_STIFF_AFTER` of them
+  switch to the Rosenbrock method, and :data:`RESET_AFTER` consecutive
+  non-stiff steps clear the count (hysteresis).
+- **Stiff mode** (Rodas5P, the same stages as ``method="rodas5p"``). After every
+  accepted step one power iteration on the Jacobian by a finite difference of
+  f (one more f evaluation, warm-started, so it converges over the steps) gives
+  ``rho``; :data:`TO_EXPLICIT_AFTER` consecutive accepted steps with
+  ``h rho <`` :data:`EXPLICIT_HRHO` (well inside DOPRI5's stability region)
+  switch back.
+
+The switch happens between steps, after the observer has seen the step: the
+new method starts from the accepted state with f(y) already known (DOPRI5's
+FSAL stage, or Rodas5P's f0), and the step-size controller carries on (both
+methods have q = 5). The dense output of both is returned in the Rosenbrock's
+Hermite form (DOPRI5's polynomial continuous extension rewritten exactly, see
+:func:`_erk_dense_hermite`), so the observer sees one kind and every step's
+interpolant runs from its y0 to its y1: the trajectory the section and the
+samples see is continuous across a switch.
+
+Statistics (the last :data:`N_AUTO_STATS` slots of the workspace's ``flags``,
+which :func:`.trajectory._run` copies out): switches to stiff and to explicit,
+and the accepted steps of each method. Nothing here is compiled unless a run asks for
+"auto" (its records are types of their own).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+from numba.extending import overload
+
+from ..base.jit import JIT, OVERLOAD, is_record
+from .problems import problem_f, problem_jac
+from .steppers import (
+    DENSE_HERMITE,
+    DOPRI5_METHOD,
+    RODAS5P_METHOD,
+    alloc_workspace,
+    rosenbrock_step,
+    stepper_accept,
+    stepper_dense,
+    stepper_dense_kind,
+    stepper_init,
+    stepper_step,
+)
+
+__all__ = [
+    "AutoMethod",
+    "AutoWorkspace",
+    "AUTO_METHOD",
+    "auto_method",
+    "AUTO_STATS",
+    "N_AUTO_STATS",
+    "STIFF_HRHO",
+    "TO_STIFF_AFTER",
+    "RESET_AFTER",
+    "EXPLICIT_HRHO",
+    "TO_EXPLICIT_AFTER",
+    "N_AUTO_FLAGS",
+]
+
+_JIT = JIT
+_OVL = OVERLOAD
+
+#: The switching method: an explicit record, a Rosenbrock record, the controller's
+#: q, and the switching rule's thresholds (see the module docstring and the
+#: constants below, which are the values of :data:`AUTO_METHOD`).
+AutoMethod = namedtuple(
+    "AutoMethod",
+    ["erk", "ros", "q", "stiff_hrho", "to_stiff_after", "reset_after", "explicit_hrho",
+     "to_explicit_after"],
+)  # fmt: skip
+
+#: DOPRI5's stability boundary on the negative real axis (Hairer's test value).
+STIFF_HRHO = 3.25
+#: Stiff-flagged accepted explicit steps that switch to the Rosenbrock method.
+TO_STIFF_AFTER = 3
+#: Consecutive non-stiff explicit steps that clear the stiff count.
+RESET_AFTER = 6
+#: h rho below which the explicit method is taken to be stable (a margin below 3.25).
+EXPLICIT_HRHO = 1.5
+#: Consecutive accepted Rosenbrock steps with h rho below EXPLICIT_HRHO that switch back.
+TO_EXPLICIT_AFTER = 4
+
+
+def auto_method(
+    stiff_hrho: float = STIFF_HRHO,
+    to_stiff_after: int = TO_STIFF_AFTER,
+    reset_after: int = RESET_AFTER,
+    explicit_hrho: float = EXPLICIT_HRHO,
+    to_explicit_after: int = TO_EXPLICIT_AFTER,
+) -> AutoMethod:
+    """The switching method record (DOPRI5 and Rodas5P) with the given thresholds."""
+    return AutoMethod(
+        DOPRI5_METHOD, RODAS5P_METHOD, 5.0, float(stiff_hrho), int(to_stiff_after),
+        int(reset_after), float(explicit_hrho), int(to_explicit_after),
+    )  # fmt: skip
+
+
+#: ``method="auto"``.
+AUTO_METHOD = auto_method()
+assert DOPRI5_METHOD.q == RODAS5P_METHOD.q == AUTO_METHOD.q
+# the Hermite form of DOPRI5's quartic extension has 3 rows, as Rodas5P's
+assert DOPRI5_METHOD.P.shape[0] - 1 == RODAS5P_METHOD.H.shape[0]
+
+# slots of AutoWorkspace.flags (slot 0: the Jacobian is fresh, as in StepWorkspace)
+A_MODE, A_N_STIFF, A_N_CALM, A_TO_STIFF, A_TO_EXPLICIT, A_STEPS_ERK, A_STEPS_ROS = range(1, 8)
+#: Size of AutoWorkspace.flags; the statistics are its last N_AUTO_STATS slots
+#: (read by :func:`.trajectory._run` on any workspace whose flags are this long).
+N_AUTO_FLAGS = 8
+# slots of AutoWorkspace.fst
+A_H, A_HRHO = range(2)
+#: The statistics, in order (``flags[A_TO_STIFF:]``).
+AUTO_STATS = ("to_stiff", "to_explicit", "steps_explicit", "steps_rosenbrock")
+N_AUTO_STATS = len(AUTO_STATS)
+
+#: The workspace: :class:`~.steppers.StepWorkspace`'s fields (K with the larger
+#: stage count; ``flags`` with the mode, counters and statistics after the
+#: Jacobian flag) and ``y6`` (DOPRI5's sixth stage argument), ``v``/``fv`` (the
+#: power iteration's vector and scratch) and ``fst`` (last h, last h rho).
+AutoWorkspace = namedtuple(
+    "AutoWorkspace",
+    ["K", "ytmp", "ftmp", "f0", "ynew", "err", "D", "flags", "y6", "v", "fv", "fst"],
+)
+
+_is = is_record
+
+
+@njit(**_JIT)
+def _alloc_auto(stages: int, dense_rows: int, n: int) -> AutoWorkspace:
+    v = np.full(n, 1.0 / math.sqrt(n))
+    return AutoWorkspace(
+        np.zeros((stages, n)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+        np.zeros((dense_rows, n)), np.zeros(N_AUTO_FLAGS, dtype=np.int64), np.zeros(n), v,
+        np.zeros(n), np.zeros(2),
+    )  # fmt: skip
+
+
+@overload(alloc_workspace, **_OVL)
+def _auto_alloc_workspace(method, n):
+    if _is(method, AutoMethod):
+        return lambda method, n: _alloc_auto(
+            max(method.erk.b.size, method.ros.b.size), method.ros.H.shape[0], n
+        )
+
+
+@njit(inline="always", **_JIT)
+def _erk_step_rho(A, b, b_err, prob, y0, h, K, ytmp, y1, err, y6) -> float:
+    """:func:`.steppers.erk_step` (the same arithmetic) that keeps the sixth stage's
+    argument in ``y6`` and returns Hairer's stiffness estimate h |k7 - k6| / |y1 - y6|."""
+    s = b.size
+    n = y0.size
+    for st in range(1, s):
+        for i in range(n):
+            acc = 0.0
+            for j in range(st):
+                acc += A[st, j] * K[j, i]
+            ytmp[i] = y0[i] + h * acc
+        if st == s - 2:
+            for i in range(n):
+                y6[i] = ytmp[i]
+        if st == s - 1:
+            for i in range(n):
+                y1[i] = ytmp[i]
+        problem_f(prob, ytmp, K[st])
+    num = 0.0
+    den = 0.0
+    for i in range(n):
+        e = 0.0
+        for j in range(s):
+            e += b_err[j] * K[j, i]
+        err[i] = h * e
+        dk = K[s - 1, i] - K[s - 2, i]
+        dy = y1[i] - y6[i]
+        num += dk * dk
+        den += dy * dy
+    if den > 0.0:
+        return h * math.sqrt(num / den)
+    return 0.0
+
+
+@njit(inline="always", **_JIT)
+def _power_step(prob, y, f0, v, ytmp, fv) -> float:
+    """One power iteration on J(y) by a forward difference of f: |J v| for |v| = 1; v <- J v / |J v|."""
+    n = y.size
+    ny = 0.0
+    for i in range(n):
+        ny += y[i] * y[i]
+    delta = 1e-7 * (1.0 + math.sqrt(ny))
+    for i in range(n):
+        ytmp[i] = y[i] + delta * v[i]
+    problem_f(prob, ytmp, fv)
+    norm = 0.0
+    for i in range(n):
+        fv[i] = (fv[i] - f0[i]) / delta
+        norm += fv[i] * fv[i]
+    norm = math.sqrt(norm)
+    if norm > 0.0 and math.isfinite(norm):
+        for i in range(n):
+            v[i] = fv[i] / norm
+        return norm
+    for i in range(n):  # restart from the diagonal
+        v[i] = 1.0 / math.sqrt(n)
+    return 0.0 if norm == 0.0 else math.inf
+
+
+@overload(stepper_init, **_OVL)
+def _auto_init(method, prob, lin, y, ws):
+    if _is(method, AutoMethod):
+
+        def impl(method, prob, lin, y, ws):
+            problem_f(prob, y, ws.f0)
+            for i in range(y.size):
+                ws.K[0, i] = ws.f0[i]
+            for k in range(ws.flags.size):
+                ws.flags[k] = 0  # Jacobian stale, explicit mode, no counts
+            ws.fst[A_H] = 0.0
+            ws.fst[A_HRHO] = 0.0
+
+        return impl
+
+
+@overload(stepper_step, **_OVL)
+def _auto_step(method, prob, lin, y, h, ws):
+    if _is(method, AutoMethod):
+
+        def impl(method, prob, lin, y, h, ws):
+            ws.fst[A_H] = h
+            if ws.flags[A_MODE] == 0:
+                e = method.erk
+                ws.fst[A_HRHO] = _erk_step_rho(
+                    e.A, e.b, e.b_err, prob, y, h, ws.K, ws.ytmp, ws.ynew, ws.err, ws.y6
+                )
+                return True
+            r = method.ros
+            if ws.flags[0] == 0:
+                problem_jac(prob, y, lin)
+                ws.flags[0] = 1
+            return rosenbrock_step(
+                r.gamma, r.a, r.C, r.b, r.b_err, prob, lin, y, ws.f0, h, ws.K, ws.ytmp, ws.ftmp,
+                ws.ynew, ws.err,
+            )  # fmt: skip
+
+        return impl
+
+
+@overload(stepper_accept, **_OVL)
+def _auto_accept(method, prob, lin, y, ws, modified):
+    if _is(method, AutoMethod):
+
+        def impl(method, prob, lin, y, ws, modified):
+            n = y.size
+            ist = ws.flags
+            if ist[A_MODE] == 0:
+                ist[A_STEPS_ERK] += 1
+                if modified:
+                    problem_f(prob, y, ws.K[0])
+                else:
+                    last = method.erk.b.size - 1
+                    for i in range(n):
+                        ws.K[0, i] = ws.K[last, i]
+                hrho = ws.fst[A_HRHO]
+                if hrho > method.stiff_hrho:
+                    ist[A_N_STIFF] += 1
+                    ist[A_N_CALM] = 0
+                else:
+                    ist[A_N_CALM] += 1
+                    if ist[A_N_CALM] >= method.reset_after:
+                        ist[A_N_STIFF] = 0
+                if ist[A_N_STIFF] >= method.to_stiff_after:
+                    # to Rodas5P: f(y) is the FSAL stage; start the power iteration
+                    # on the stiff direction the estimate saw (y1 - y6)
+                    ist[A_MODE] = 1
+                    ist[A_TO_STIFF] += 1
+                    ist[A_N_STIFF] = 0
+                    ist[A_N_CALM] = 0
+                    ws.flags[0] = 0
+                    nv = 0.0
+                    for i in range(n):
+                        ws.f0[i] = ws.K[0, i]
+                        d = ws.ynew[i] - ws.y6[i]
+                        ws.v[i] = d
+                        nv += d * d
+                    nv = math.sqrt(nv)
+                    for i in range(n):
+                        ws.v[i] = ws.v[i] / nv if nv > 0.0 else 1.0 / math.sqrt(n)
+                return
+            ist[A_STEPS_ROS] += 1
+            problem_f(prob, y, ws.f0)
+            ws.flags[0] = 0
+            rho = _power_step(prob, y, ws.f0, ws.v, ws.ytmp, ws.fv)
+            if ws.fst[A_H] * rho < method.explicit_hrho:
+                ist[A_N_CALM] += 1
+            else:
+                ist[A_N_CALM] = 0
+            if ist[A_N_CALM] >= method.to_explicit_after:
+                ist[A_MODE] = 0
+                ist[A_TO_EXPLICIT] += 1
+                ist[A_N_CALM] = 0
+                ist[A_N_STIFF] = 0
+                for i in range(n):
+                    ws.K[0, i] = ws.f0[i]  # DOPRI5's first stage
+
+        return impl
+
+
+@njit(inline="always", **_JIT)
+def _erk_dense_hermite(P, K, h, D) -> None:
+    """DOPRI5's continuous extension in the Hermite form of the Rosenbrock methods.
+
+    With E_r = h sum_j P[r, j] k_j, y(theta) = y0 + sum_r theta^(r+1) E_r, and
+    y1 = y0 + sum_r E_r, the same polynomial is (1 - theta) y0 + theta (y1 +
+    (1 - theta) (D_0 + theta D_1 + theta^2 D_2)) with D_k = -sum_{r > k} E_r.
+    """
+    m = P.shape[0]
+    s = P.shape[1]
+    n = K.shape[1]
+    for i in range(n):
+        acc = 0.0
+        for r in range(m - 1, 0, -1):
+            e = 0.0
+            for j in range(s):
+                e += P[r, j] * K[j, i]
+            acc -= h * e
+            D[r - 1, i] = acc
+
+
+@overload(stepper_dense, **_OVL)
+def _auto_dense(method, ws, h):
+    if _is(method, AutoMethod):
+
+        def impl(method, ws, h):
+            if ws.flags[A_MODE] == 0:
+                _erk_dense_hermite(method.erk.P, ws.K, h, ws.D)
+            else:
+                H = method.ros.H
+                s = H.shape[1]
+                for r in range(H.shape[0]):
+                    for i in range(ws.K.shape[1]):
+                        acc = 0.0
+                        for j in range(s):
+                            acc += H[r, j] * ws.K[j, i]
+                        ws.D[r, i] = acc
+
+        return impl
+
+
+@overload(stepper_dense_kind, **_OVL)
+def _auto_dense_kind(method):
+    if _is(method, AutoMethod):
+        return lambda method: DENSE_HERMITE
