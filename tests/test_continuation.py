@@ -367,8 +367,8 @@ def test_switching_at_the_period_doubling_of_fig6_p2_gives_a_period_4_orbit():
     assert r.poincare.shape[0] == 4
     np.testing.assert_allclose(r.poincare, o4.points[[1, 2, 3, 0]], atol=1e-7)
     np.testing.assert_allclose(r.t_poincare, o4.times, atol=1e-6)
-    # continued upwards, the branch grows unstable and ends where its return time would
-    # jump (42.38 -> 31.99 within 1.5e-6 in eta, once joined by a sharp end's restart):
+    # continued upwards, the branch grows unstable and ends where its recorded return time
+    # would jump (42.38 -> 31.99 within 1.5e-6 in eta, which the branch used to accept):
     # never a branch that mixes two families of fixed points of P^4
     b4 = continue_orbit(o4, "eta", (5.0428, 5.0440), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
                         max_points=400, stick_events=False)  # fmt: skip

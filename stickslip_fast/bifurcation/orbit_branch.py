@@ -325,13 +325,15 @@ def _return_times(xs, periods, compute) -> np.ndarray:
 def _cut_at_period_jump(xs, mults, T, bifs, status):
     """The branch up to the first step whose return time jumps by more than 5 %.
 
-    The corrector refuses such steps (``jump`` in :func:`_continue_single`), but a sharp
-    end's restart (:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s
-    ``refine``) re-corrects a recent point by its distance alone; at multipliers of 1e5
-    and more, near a grazing of the section, that point can carry another return time:
-    Fig. 6's period-4 branch went from T = 42.38 to 31.99 within 1.5e-6 in eta. A branch
-    never joins two such families: it ends "nonsmooth" at the last point before the jump,
-    and the bifurcations after it are dropped.
+    The corrector refuses such steps (``jump`` in :func:`_continue_single`), but the
+    return time recorded for a point is that of its latest evaluation, and the sharp
+    ends' tighter stages evaluate recent points again. Near a tangency of the orbit with
+    the section, whether a crossing is counted can depend on the integration, so a point
+    accepted with one T can carry another: Fig. 6's period-4 branch went from T = 42.38 to
+    31.99 within 1.5e-6 in eta (refusing such restarts in
+    :func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength` did not prevent it).
+    A branch never joins two such families: it ends "nonsmooth" at the last point before
+    the jump, and the bifurcations after it are dropped.
     """
     rel = np.abs(np.diff(T)) / np.abs(T[:-1])
     bad = np.flatnonzero(np.isfinite(rel) & (rel > 0.05))
