@@ -199,6 +199,10 @@ segments : int
 Returns
 -------
 Branch
+    Its ``status`` says how it ended; "nonsmooth" (with a "section-grazing" point
+    last) where the return time of the next point would jump by more than 5 %: a
+    crossing of the section appears or vanishes, and a branch never joins two
+    families of fixed points of P^p.
 
 Raises
 ------
