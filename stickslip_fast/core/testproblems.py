@@ -179,7 +179,8 @@ def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
 
 
 @njit(**_JIT)
-def _solve_with(method, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort):
+def _solve_with(method, prob, y, ws, t_end, rtol, atol, h_fixed, max_steps, abort):
+    """``method`` on the driver from y (overwritten) to t_end, in the workspace ``ws``."""
     n = y.size
     lin = DenseLinear(np.zeros((n, n)), np.zeros((n, n)), np.zeros(n, dtype=np.int64))
     obs = PoincareObserver(
@@ -189,7 +190,7 @@ def _solve_with(method, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort):
     istat = np.zeros(2, dtype=np.int64)
     fstat = np.zeros(1)
     st = drive(
-        method, prob, lin, alloc_workspace(method, n), y, t_end,
+        method, prob, lin, ws, y, t_end,
         Controls(rtol, atol, h_fixed, max_steps), obs, simple_stop(STOP_AT_END, 0, 0), abort,
         istat, fstat,
     )  # fmt: skip
@@ -205,14 +206,17 @@ def solve_test_problem(rosenbrock, prob, y0, t_end, rtol, atol, h_fixed, max_ste
     """
     y = y0.copy()
     abort = np.zeros(1, dtype=np.int64)
+    n = y.size
     if rosenbrock:
         st, ns, nr, t = _solve_with(
-            RODAS5P_METHOD, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort
-        )
+            RODAS5P_METHOD, prob, y, alloc_workspace(RODAS5P_METHOD, n), t_end, rtol, atol,
+            h_fixed, max_steps, abort,
+        )  # fmt: skip
     else:
         st, ns, nr, t = _solve_with(
-            DOPRI5_METHOD, prob, y, t_end, rtol, atol, h_fixed, max_steps, abort
-        )
+            DOPRI5_METHOD, prob, y, alloc_workspace(DOPRI5_METHOD, n), t_end, rtol, atol,
+            h_fixed, max_steps, abort,
+        )  # fmt: skip
     return y, st, ns, nr, t
 
 
@@ -224,18 +228,9 @@ def solve_test_problem_auto(prob, y0, t_end, rtol, atol, max_steps):
     statistics: switches to stiff, to explicit, explicit and Rosenbrock steps).
     """
     y = y0.copy()
-    n = y.size
-    lin = DenseLinear(np.zeros((n, n)), np.zeros((n, n)), np.zeros(n, dtype=np.int64))
-    obs = PoincareObserver(
-        Section(0, True), 0.0, np.empty((0, n)), np.empty(0), np.empty((0, n)), 1.0,
-        np.empty(n), np.empty(n), np.zeros(2, dtype=np.int64),
-    )  # fmt: skip
-    istat = np.zeros(2, dtype=np.int64)
-    fstat = np.zeros(1)
-    ws = alloc_workspace(AUTO_METHOD, n)
-    st = drive(
-        AUTO_METHOD, prob, lin, ws, y, t_end, Controls(rtol, atol, 0.0, max_steps), obs,
-        simple_stop(STOP_AT_END, 0, 0), np.zeros(1, dtype=np.int64), istat, fstat,
-    )  # fmt: skip
+    ws = alloc_workspace(AUTO_METHOD, y.size)
+    st, ns, nr, t = _solve_with(
+        AUTO_METHOD, prob, y, ws, t_end, rtol, atol, 0.0, max_steps, np.zeros(1, dtype=np.int64)
+    )
     stats = ws.flags[N_AUTO_FLAGS - N_AUTO_STATS :].copy()
-    return y, st, istat[0], istat[1], fstat[0], stats
+    return y, st, ns, nr, t, stats
