@@ -6,7 +6,7 @@ a shared DC motor), integrates it with compiled stiff and explicit solvers, and
 records Poincare points at the local minima of x_1.
 
 Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load_sweep`,
-:func:`census`, :func:`basins`; periodic orbits and their multipliers: :func:`find_orbit`,
+:func:`census`, :func:`basins` (and a saddle's :func:`stable_manifold` in its plane); periodic orbits and their multipliers: :func:`find_orbit`,
 :func:`find_equilibrium`, :func:`continue_orbit`, :func:`continue_equilibrium` (docs/orbits.md).
 """
 
@@ -19,6 +19,7 @@ _cache_guard.check()  # before any kernel runs: drop kernels compiled from other
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
 from .analysis.basins import BasinsResult, basins, load_basins
+from .analysis.basins_manifold import StableManifold
 from .analysis.census import CensusResult, census, load_census
 from .analysis.census_plane import CensusPlaneResult
 from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
@@ -34,6 +35,7 @@ from .bifurcation.continuation import (
 )
 from .bifurcation.curve import Codim2Point, Curve, continue_bifurcation
 from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
+from .bifurcation.stable_manifold import stable_manifold
 from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
 from .model.system import PRESETS, SWEEPABLE, System
@@ -54,6 +56,8 @@ __all__ = [
     "basins",
     "BasinsResult",
     "load_basins",
+    "stable_manifold",
+    "StableManifold",
     "MODES",
     "largest_lyapunov",
     "LyapunovResult",

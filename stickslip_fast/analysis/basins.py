@@ -150,6 +150,9 @@ class BasinsResult:
         The refined boundary (:func:`stickslip_fast.analysis.basins_boundary.refine_boundary`).
     edge : EdgeCheck or None
         The saddle check (:func:`stickslip_fast.bifurcation.basin_saddles.edge_check`).
+    manifold : StableManifold or None
+        A saddle orbit's stable manifold in the plane
+        (:func:`stickslip_fast.bifurcation.stable_manifold.stable_manifold`).
     """
 
     system: System
@@ -165,6 +168,7 @@ class BasinsResult:
     path: Path | None = None
     boundary: Any = None
     edge: Any = None
+    manifold: Any = None
     identity_tol: float | None = field(default=None, repr=False)
 
     @property
@@ -404,14 +408,17 @@ def load_basins(path: str | Path, *, entropy_box: int | None = None) -> BasinsRe
     """Open a basins file as a :class:`BasinsResult` (classified from its runs).
 
     Cells not computed yet (an unfinished file) are labelled -1. The refined
-    boundary and the saddle check are read back when the file has them.
+    boundary, the saddle check and the stable manifold are read back when the file has them.
     """
     from ..io.basins import read_basins_extras, read_basins_meta
     from .basins_boundary import Boundary, EdgeCheck
+    from .basins_manifold import StableManifold
     from .census import load_census
 
     meta, stored_box = read_basins_meta(path)
     res = load_census(path)
     result = _result(res, meta, entropy_box or stored_box or DEFAULT_ENTROPY_BOX)
-    result.boundary, result.edge = read_basins_extras(path, Boundary, EdgeCheck)
+    result.boundary, result.edge, result.manifold = read_basins_extras(
+        path, Boundary, EdgeCheck, StableManifold
+    )
     return result

@@ -27,6 +27,17 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
                                (0 refined to tol, 1 a third outcome met); attrs tol,
                                n_pairs, n_runs, seed
       edge/                    (optional) the saddle check: see analysis.basins_boundary.EdgeCheck
+      manifold/                (optional) a saddle orbit's stable manifold in the plane
+                               (bifurcation.stable_manifold): manifold_point and
+                               saddle_point scales; u, v (the curve points, in order
+                               along each branch), branch, n (crossings of the
+                               condition w.(P^n(p) - x*) = 0), target (the orbit
+                               point P^n(p) lands near), residual (|w.(P^n(p) - x*)|),
+                               distance (max norm |P^n(p) - x*|) per point; mu
+                               (saddle_point), saddle_points (saddle_point, state);
+                               attrs saddle_period, r_local, tol, ds, n_evals,
+                               branch_status (JSON list: why each branch ended),
+                               settings (JSON)
       boundary_progress/       (only while a refinement is unfinished) the brackets
                                after the last completed bisection step: u_a, v_a,
                                u_b, v_b, status; attrs config (JSON: tol,
@@ -56,7 +67,7 @@ __all__ = [
     "write_refine_progress",
 ]
 
-_KEEP = ("boundary", "edge", "boundary_progress")
+_KEEP = ("boundary", "edge", "manifold", "boundary_progress")
 _PROGRESS = "boundary_progress"
 
 
@@ -165,11 +176,14 @@ def read_basins_meta(path: str | Path) -> tuple[dict, int | None]:
     return cfg["basins"], box
 
 
-def read_basins_extras(path: str | Path, boundary_cls: Any, edge_cls: Any) -> tuple[Any, Any]:
-    """The refined boundary and the saddle check stored in a basins file, or None.
+def read_basins_extras(
+    path: str | Path, boundary_cls: Any, edge_cls: Any, manifold_cls: Any = None
+) -> tuple[Any, ...]:
+    """The refined boundary, the saddle check (and the stable manifold) of a basins file.
 
-    Built by the records' ``from_group`` (``Boundary`` and ``EdgeCheck`` of the
-    analysis layer, passed in).
+    Each None where the file has none. Built by the records' ``from_group``
+    (``Boundary``, ``EdgeCheck`` and ``StableManifold`` of the analysis layer,
+    passed in); with ``manifold_cls`` None, only the first two are returned.
     """
     Boundary, EdgeCheck = boundary_cls, edge_cls  # noqa: N806
 
@@ -177,7 +191,10 @@ def read_basins_extras(path: str | Path, boundary_cls: Any, edge_cls: Any) -> tu
         g = h5.get("basins")
         b = Boundary.from_group(g["boundary"]) if g is not None and "boundary" in g else None
         e = EdgeCheck.from_group(g["edge"]) if g is not None and "edge" in g else None
-    return b, e
+        if manifold_cls is None:
+            return b, e
+        m = manifold_cls.from_group(g["manifold"]) if g is not None and "manifold" in g else None
+    return b, e, m
 
 
 def replace_subgroup(path: str | Path, name: str) -> h5py.File:
