@@ -223,13 +223,22 @@ class _Condition:
             return np.nan, np.inf
         return float(s.left @ (y - s.point)), float(np.max(np.abs(y - s.point)))
 
-    def closest(self, uv: np.ndarray, n_max: int) -> tuple[int, int, float]:
-        """(n, j, distance) of the image P^n(uv) closest to a saddle point, n <= n_max."""
+    def closest(self, uv: np.ndarray, n_max: int, r_local: float) -> tuple[int, int]:
+        """(n, j): the first image P^n(uv), n <= n_max, within ``r_local`` of a saddle
+        point x*_j, or else the closest one."""
         y = self.images(uv, n_max)
         d = np.array([np.max(np.abs(y - s.point), axis=1) for s in self.saddles])  # (p, n_max)
         d = np.where(np.isfinite(d), d, np.inf)
-        j, k = np.unravel_index(int(np.argmin(d)), d.shape)
-        return int(k) + 1, int(j), float(d[j, k])
+        inside = np.flatnonzero(np.min(d, axis=0) <= r_local)
+        k = int(inside[0]) if inside.size else int(np.argmin(np.min(d, axis=0)))
+        return k + 1, int(np.argmin(d[:, k]))
+
+    def first_inside(self, uv: np.ndarray, n: int, j: int, r_local: float) -> int:
+        """The smallest m = n (mod p), m <= n, with ||P^m(uv) - x*_j|| <= r_local (else n)."""
+        y = self.images(uv, n)[n - 1 :: -self.period][::-1]
+        d = np.max(np.abs(y - self.saddles[j].point), axis=1)
+        ok = np.flatnonzero(d <= r_local)
+        return n - self.period * (len(y) - 1 - int(ok[0])) if ok.size else n
 
 
 def _root_on_line(cond: _Condition, q, nrm, n, j, s_max, tol, g0=None) -> tuple:
@@ -300,7 +309,8 @@ def _correct(cond: _Condition, q: np.ndarray, nrm: np.ndarray, n: int, j: int, o
             return None, "ds-min"
         q = q + r[0] * nrm
         if r[2] <= o["r_local"]:
-            return (q, n, j, r[1], r[2]), None
+            m = cond.first_inside(q, n, j, o["r_local"])  # the next point starts from it
+            return (q, n, j, r[1], r[2], m), None
         if n + cond.period > o["n_max"]:
             return None, "n-max"
         n += cond.period
@@ -319,7 +329,7 @@ def _gradient(cond: _Condition, uv: np.ndarray, n: int, j: int, h: float) -> np.
 
 def _seed(cond: _Condition, uv0: np.ndarray, o: dict) -> tuple:
     """A first curve point near ``uv0`` and the curve's tangent there, or (None, why)."""
-    n, j, _ = cond.closest(uv0, o["n_max"])
+    n, j = cond.closest(uv0, o["n_max"], o["r_local"])
     grad = _gradient(cond, uv0, n, j, o["h"])
     if not np.all(np.isfinite(grad)) or not np.any(grad):
         return None, "ds-min"
@@ -330,6 +340,13 @@ def _seed(cond: _Condition, uv0: np.ndarray, o: dict) -> tuple:
     if not np.all(np.isfinite(grad)) or not np.any(grad):
         return None, "ds-min"
     return pt, _unit(np.array([-grad[1], grad[0]]))
+
+
+def _passes(p0: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+    """Does the step a -> b pass p0 (within a quarter of its length): the curve closed?"""
+    seg = b - a
+    t = float(np.clip((p0 - a) @ seg / (seg @ seg), 0.0, 1.0))
+    return bool(np.linalg.norm(a + t * seg - p0) < 0.25 * np.linalg.norm(seg))
 
 
 def _inside(uv: np.ndarray, box: np.ndarray) -> bool:
@@ -343,7 +360,7 @@ def _half_branch(cond: _Condition, start: tuple, t: np.ndarray, box: np.ndarray,
     while len(pts) < o["max_points"]:
         last = pts[-1]
         evals = cond.n_evals
-        pt, why = _correct(cond, last[0] + ds * t, np.array([-t[1], t[0]]), last[1], last[2],
+        pt, why = _correct(cond, last[0] + ds * t, np.array([-t[1], t[0]]), last[5], last[2],
                            dict(o, s_max=ds))  # fmt: skip
         ok = pt is not None
         if ok:
@@ -356,11 +373,14 @@ def _half_branch(cond: _Condition, start: tuple, t: np.ndarray, box: np.ndarray,
             if ds < o["ds_min"]:
                 return pts, "ds-min"
             continue
-        if not _inside(pt[0], box):
-            return pts, "box"
+        if not _inside(pt[0], box):  # step closer to the edge, down to 1 % of the first ds
+            if ds < 0.02 * o["ds"]:
+                return pts, "box"
+            ds *= 0.5
+            continue
         t = _unit(pt[0] - last[0])
         pts.append(pt)
-        if len(pts) > 3 and np.linalg.norm(pt[0] - pts[0][0]) < ds:
+        if len(pts) > 3 and _passes(pts[0][0], last[0], pt[0]):
             return pts, "closed"
         if cond.n_evals - evals <= 8:
             ds = min(1.5 * ds, o["ds_max"])
@@ -444,6 +464,8 @@ def trace_manifold(
             pts, why = _half_branch(cond, start, sign * t, box, o)
             branches.append(pts if sign > 0 else pts[1:])
             status.append(why)
+            if why == "closed":  # the whole loop: no other half
+                break
     return _collect(branches, status, seed_status, cond.n_evals, len(saddles[0].point))
 
 

@@ -1,0 +1,107 @@
+"""The stable manifold of a saddle as a traced curve (stable_manifold, trace_manifold).
+
+Known references: maps conjugate to a linear saddle, F = h o diag(mu, lam1, lam2) o h^-1
+with h(x, y, z) = (x + a y^2 + b z^2, y, z), whose stable manifold is exactly the
+paraboloid x = a y^2 + b z^2: in a plane it is a parabola (crossing the box) or,
+in the plane x = c, the ellipse a y^2 + b z^2 = c (a closed curve). The points on
+either side of it escape in opposite directions (the two "basins"). For the model:
+the unstable period-1 orbit past Fig. 6's upper fold, whose points on the traced curve
+are mapped by P^n to within r_local of the saddle along its stable directions, and
+whose two sides reach different attractors; the record's round trip through a file.
+Cost: about 1 s warm for the maps; the model test ~20 s warm on a busy 2-core VM.
+"""
+
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.analysis.basins_manifold import StableManifold, local_saddles, trace_manifold
+
+MU, LAM, A, B = 3.0, (0.5, -0.4), 0.8, 0.5
+
+
+def conjugate_map(z):
+    """F = h o L o h^-1 on R^3 (see the module docstring)."""
+    x, y, w = z[..., 0], z[..., 1], z[..., 2]
+    X = MU * (x - A * y**2 - B * w**2)
+    Y, W = LAM[0] * y, LAM[1] * w
+    return np.stack([X + A * Y**2 + B * W**2, Y, W], -1)
+
+
+def plane_crossings_of(base, d1, d2):
+    """crossings(uv, n) of trace_manifold for the plane base + u d1 + v d2."""
+
+    def crossings(uv, n):
+        z = base + uv[:, :1] * d1 + uv[:, 1:2] * d2
+        out = np.empty((len(uv), n, 3))
+        for k in range(n):
+            z = conjugate_map(z)
+            out[:, k] = z
+        return out
+
+    return crossings
+
+
+SADDLE = local_saddles([[0.0, 0.0, 0.0]], [np.diag([MU, *LAM])])
+E = np.eye(3)
+
+
+def test_local_saddle_eigenvectors_and_refusals():
+    s = SADDLE[0]
+    assert s.mu == pytest.approx(MU) and abs(s.right @ s.left - 1) < 1e-14
+    np.testing.assert_allclose(np.abs(s.right), [1, 0, 0], atol=1e-14)
+    with pytest.raises(ValueError, match="exactly one real multiplier"):
+        local_saddles([[0.0, 0.0]], [np.diag([2.0, 3.0])])  # two unstable directions
+    with pytest.raises(ValueError, match="exactly one real multiplier"):
+        local_saddles([[0.0, 0.0]], [[[0.0, -2.0], [2.0, 0.0]]])  # a complex pair
+    with pytest.raises(ValueError, match="exactly one real multiplier"):
+        local_saddles([[0.0, 0.0]], [np.diag([0.5, 0.3])])  # stable: no unstable direction
+
+
+def test_parabola_across_the_box():
+    # plane (x, y) at z = 0.3: the manifold is the parabola x = A y^2 + B 0.09
+    base = np.array([0.0, 0.0, 0.3])
+    r = trace_manifold(plane_crossings_of(base, E[0], E[1]), SADDLE, [[0.2, 0.1]],
+                       [[-1, 1], [-1, 1]], ds=0.02, tol=1e-13, r_local=1e-4)  # fmt: skip
+    u, v = r["uv"].T
+    assert r["seed_status"] == ["traced"] and r["branch_status"] == ["box", "box"]
+    assert np.max(np.abs(u - (A * v**2 + B * 0.09))) < 1e-10
+    # it spans the box: u < 1 at v = +-1, so the curve leaves it at v = +-1
+    vmax = np.sqrt((1 - B * 0.09) / A)
+    assert v.max() > 1 - 1e-3 and v.min() < -1 + 1e-3 and vmax > 1  # exits at v = +-1
+    # |g_n| ~ tol * |grad g_n| ~ 1e-13 * mu^n: far inside the neighbourhood r_local
+    assert np.all(r["residual"] < 1e-3 * 1e-4) and np.all(r["distance"] <= 1e-4)
+
+
+def test_ellipse_in_an_oblique_plane_is_closed():
+    # plane x = 0.2 (axes y, z): the manifold is the ellipse A y^2 + B z^2 = 0.2
+    base = np.array([0.2, 0.0, 0.0])
+    r = trace_manifold(plane_crossings_of(base, E[1], E[2]), SADDLE, [[0.5, 0.0]],
+                       [[-1, 1], [-1, 1]], ds=0.02, tol=1e-13, r_local=1e-4)  # fmt: skip
+    y, z = r["uv"].T
+    assert "closed" in r["branch_status"]
+    assert np.max(np.abs(A * y**2 + B * z**2 - 0.2)) < 1e-10
+    ang = np.sort(np.arctan2(z / np.sqrt(0.2 / B), y / np.sqrt(0.2 / A)))
+    assert np.max(np.diff(np.r_[ang, ang[0] + 2 * np.pi])) < 0.5  # all the way round
+
+
+def test_curve_separates_the_two_escape_directions():
+    base = np.array([0.0, 0.0, 0.3])
+    cr = plane_crossings_of(base, E[0], E[1])
+    r = trace_manifold(cr, SADDLE, [[0.2, 0.1]], [[-1, 1], [-1, 1]], ds=0.05, tol=1e-13)
+    sides = []
+    for sgn in (1.0, -1.0):  # 1e-6 to the right / left of every curve point
+        uv = r["uv"] + sgn * np.array([1e-6, 0.0])
+        sides.append(np.sign(cr(uv, 40)[:, -1, 0]))  # x after 40 steps: +-huge
+    assert np.all(sides[0] == 1) and np.all(sides[1] == -1)
+    # a seed too far from the curve for its correction radius is reported, not traced
+    far = trace_manifold(cr, SADDLE, [[0.9, 0.0]], [[-1, 1], [-1, 1]], ds=0.01, seed_radius=0.05)
+    assert far["seed_status"] == ["ds-min"] and len(far["uv"]) == 0
+
+
+def test_distance_to_the_polyline():
+    m = StableManifold(np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 5.0]),
+                       np.array([0, 0, 1]), *([np.zeros(3, int)] * 2), *([np.zeros(3)] * 2),
+                       ["box", "box"], np.zeros((1, 4)), 1, np.ones(1), 1e-4, 1e-11, 1e-3, 0)  # fmt: skip
+    d = m.distance_to([[0.5, 0.25], [2.0, 0.0], [0.0, 4.0]])
+    np.testing.assert_allclose(d, [0.25, 1.0, 1.0])
