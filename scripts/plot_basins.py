@@ -5,7 +5,8 @@ subgroups; docs/basins.md). Each file is one panel: the cells coloured by attrac
 id in the census figures' colours (``scripts/plot_bifurcation.py``: one colour per
 track id), failed cells black; the attractors' Poincare points (projected onto the
 plane) as large markers; the refined boundary points as small black dots; the
-saddle orbit found by the edge check as a red cross. With ``--entropy`` a last
+saddle orbit found by the edge check as a red cross; a saddle's stable manifold
+(``stable_manifold``, the ``manifold`` subgroup) as magenta curves. With ``--entropy`` a last
 panel draws the basin entropy S_b and the boundary basin entropy S_bb of every
 file against eta.
 
@@ -75,7 +76,7 @@ def read(path: str | Path) -> dict[str, Any]:
             out[k] = g[k][...]
         out["title"] = h5.attrs.get("title", "")
         out["system"] = json.loads(h5.attrs["config"])["system"]
-        for sub in ("boundary", "edge"):
+        for sub in ("boundary", "edge", "manifold"):
             out[sub] = {k: g[sub][k][...] for k in g[sub]} if sub in g else None
             if sub in g:
                 out[sub + "_attrs"] = dict(g[sub].attrs)
@@ -95,8 +96,9 @@ def _edges(a: np.ndarray) -> np.ndarray:
     return np.concatenate([[2 * a[0] - mid[0]], mid, [2 * a[-1] - mid[-1]]])
 
 
-def draw_map(ax: Any, d: dict, mode: str = "id") -> None:
-    """One basin map with attractors, boundary and saddle."""
+def draw_map(ax: Any, d: dict, mode: str = "id", window: Any = None) -> None:
+    """One basin map with attractors, boundary, saddle and manifold (``window``: the
+    axes' limits u0, u1, v0, v1 instead of the whole map)."""
     lab = d["label"]
     col = attractor_colours(d, mode)
     top = max([0, *col, *(int(i) for i in np.unique(lab))])
@@ -129,6 +131,8 @@ def draw_map(ax: Any, d: dict, mode: str = "id") -> None:
             color="k",
             label=f"boundary ({ok.sum()} points, tol {d['boundary_attrs']['tol']:.0e})",
         )
+    if d["manifold"] is not None:
+        draw_manifold(ax, d)
     if d["edge"] is not None and np.all(np.isfinite(d["edge"]["saddle_points"])):
         e = d["edge"]
         uv = project(d, e["saddle_points"])
@@ -143,10 +147,23 @@ def draw_map(ax: Any, d: dict, mode: str = "id") -> None:
     ax.set_title(f"η = {at['eta']:g}: $S_b$ = {at['basin_entropy']:.3f}, $S_{{bb}}$ = "
                  f"{at['boundary_basin_entropy']:.3f}, α = {at['uncertainty_exponent']:.2f}",
                  fontsize=9)  # fmt: skip
-    ax.set_xlim(_edges(d["u"])[[0, -1]])
-    ax.set_ylim(_edges(d["v"])[[0, -1]])
+    ax.set_xlim(*(window[:2] if window else _edges(d["u"])[[0, -1]]))
+    ax.set_ylim(*(window[2:] if window else _edges(d["v"])[[0, -1]]))
     ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
               frameon=False)  # fmt: skip
+
+
+def draw_manifold(ax: Any, d: dict) -> None:
+    """The traced stable manifold: one line per branch, and the saddle's points."""
+    m, a = d["manifold"], d["manifold_attrs"]
+    for k, b in enumerate(np.unique(m["branch"])):
+        on = m["branch"] == b
+        ax.plot(m["u"][on], m["v"][on], "-", lw=1.4, color="magenta",
+                label=(f"stable manifold of the P{a['saddle_period']} saddle (|μ| = "
+                       f"{np.max(np.abs(m['mu'])):.3g}, {len(m['u'])} points)") if k == 0 else None)  # fmt: skip
+    if d["edge"] is None:
+        uv = project(d, m["saddle_points"])
+        ax.plot(uv[:, 0], uv[:, 1], "x", ms=11, mew=2.5, color="red")
 
 
 def draw_entropy(ax: Any, data: list[dict]) -> None:
@@ -179,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--colours", choices=("id", "kind"), default="id",
                    help="id: the census figures' track colours (default); kind: one colour "
                         "per kind and period, the same in every panel")  # fmt: skip
+    p.add_argument("--window", type=float, nargs=4, default=None, metavar=("U0", "U1", "V0", "V1"),
+                   help="draw only this part of the plane (every map panel)")  # fmt: skip
     args = p.parse_args(argv)
     data = [read(f) for f in args.files]
     args.entropy = args.entropy or args.entropy_files is not None
@@ -187,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = -(-n // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 5.6 * rows), squeeze=False)
     for ax, d in zip(axes.flat, data):
-        draw_map(ax, d, args.colours)
+        draw_map(ax, d, args.colours, args.window)
     if args.entropy:
         extra = [read(f) for f in args.entropy_files] if args.entropy_files else data
         draw_entropy(axes.flat[len(data)], extra)
