@@ -9,10 +9,10 @@ Steps (all by default; results printed, files under out/basins/):
    the edge check, and ``stable_manifold`` seeded from the refined boundary points
    -> out/basins/asym_fold_saddle.h5. Prints the distance of every refined boundary
    point to the traced curve.
-2. ``p2``: the unstable P2 orbit past the P2 fold (eta = 9.7310): continuation from the
-   P2 of the eta = 9.0 map upwards through the fold (cached in out/basins/p2_saddle.json),
-   the unstable point with |multiplier| closest to 5; its map, refinement, edge check and
-   manifold as in 1 -> out/basins/asym_p2_saddle.h5.
+2. ``p2``: the unstable P2 orbit just below the P2 fold (eta = 9.7310261603): at
+   eta = 9.73102 by Newton next to the stable P2 (see ``p2_saddle``; cached in
+   out/basins/p2_saddle.json); its map, refinement, edge check and manifold as in 1
+   -> out/basins/asym_p2_saddle.h5.
 3. ``wada``: the grid Wada test of every map in out/basins with three or more basins.
 
 Usage: ``python3 scripts/basins_manifold.py [fold] [p2] [wada]``.
@@ -65,23 +65,38 @@ def fold_saddle() -> ssf.Orbit:
     return _branch_saddle(OUT / "fold_saddle.json", branch, 1)
 
 
-def p2_saddle() -> ssf.Orbit:
-    def branch():
+def p2_saddle(eta: float = 9.73102) -> ssf.Orbit:
+    """The unstable P2 1e-5 below the P2 fold (9.7310261603): the stable P2 of the eta = 9.0
+    map followed by Newton in steps of eta to ``eta``, then Newton from it displaced by
+    3e-7 along its leading eigenvector (smaller steps return to the stable orbit, 3e-6 and
+    more fall off the smooth piece of the map). Cached in out/basins/p2_saddle.json."""
+    cache = OUT / "p2_saddle.json"
+    if not cache.exists():
         g = np.linspace(-0.3, 0.3, 40)
         m = ssf.basins(ssf.System.preset("asymmetric", eta=9.0), (g, g),
                        out=OUT / "scan/asym_eta9_rest40.h5", progress=False)  # fmt: skip
-        p2 = next(a for a in m.attractors if a.kind == "orbit" and a.period == 2)
-        orb = ssf.find_orbit(m.system, p2.points[0], period=2)
-        return ssf.continue_orbit(orb, "eta", (8.9, 9.75), ds=0.05, ds_max=0.1, direction=1)
-
-    return _branch_saddle(OUT / "p2_saddle.json", branch, 2)
+        z = next(a for a in m.attractors if a.kind == "orbit" and a.period == 2).points[0]
+        for e in (9.7, 9.73, 9.7309, 9.73101, eta):
+            node = ssf.find_orbit(ssf.System.preset("asymmetric", eta=e), z, period=2)
+            z = node.points[0]
+        ev, vr = np.linalg.eig(node.jacobian)
+        v = np.insert(np.real(vr[:, np.argmax(np.abs(ev))]), 1, 0.0)
+        sad = ssf.find_orbit(node.system, z + 3e-7 * v / np.linalg.norm(v), period=2)
+        cache.write_text(json.dumps({"eta": eta, "point": sad.points[0].tolist(),
+                                     "node": z.tolist(), "node_mu": abs(node.multipliers[0])}))  # fmt: skip
+    c = json.loads(cache.read_text())
+    orb = ssf.find_orbit(ssf.System.preset("asymmetric", eta=c["eta"]), c["point"], period=2)
+    print(f"saddle: eta = {c['eta']!r}, {orb}; the stable P2's leading multiplier {c['node_mu']:.4g}, "
+          f"{np.max(np.abs(orb.points[0] - c['node'])):.2e} away")  # fmt: skip
+    return orb
 
 
 def study(orb: ssf.Orbit, path: Path, segments: int = 60, **trace) -> None:
     """Map, refine, edge check and manifold for the saddle ``orb``; distances printed."""
     t0 = time.time()
-    r = ssf.basins(orb.system, (G, G), out=path, progress=False,
-                   title=f"Basins at eta = {orb.system.eta!r} with a P{orb.period} saddle")  # fmt: skip
+    r = ssf.load_basins(path) if path.exists() else ssf.basins(
+        orb.system, (G, G), out=path, progress=False,
+        title=f"Basins at eta = {orb.system.eta!r} with a P{orb.period} saddle")  # fmt: skip
     print(r, f"[map {time.time() - t0:.0f} s]")
     if r.boundary is None:
         refine_boundary(r, tol=1e-10, max_segments=segments)
@@ -99,9 +114,14 @@ def study(orb: ssf.Orbit, path: Path, segments: int = 60, **trace) -> None:
     ok = b.status == 0
     if len(m.u):
         d = m.distance_to(np.stack([b.u[ok], b.v[ok]], 1))
-        print("distance of the refined boundary points to the curve:", np.array2string(d, precision=2))
+        print(
+            "distance of the refined boundary points to the curve:", np.array2string(d, precision=2)
+        )
         for lab in sorted({*b.label_a[ok].tolist(), *b.label_b[ok].tolist()}):
-            print(f"  pairs with label {lab}:", np.sum((b.label_a[ok] == lab) | (b.label_b[ok] == lab)))
+            print(
+                f"  pairs with label {lab}:",
+                np.sum((b.label_a[ok] == lab) | (b.label_b[ok] == lab)),
+            )
 
 
 def wada() -> None:

@@ -105,3 +105,29 @@ def test_distance_to_the_polyline():
                        ["box", "box"], np.zeros((1, 4)), 1, np.ones(1), 1e-4, 1e-11, 1e-3, 0)  # fmt: skip
     d = m.distance_to([[0.5, 0.25], [2.0, 0.0], [0.0, 4.0]])
     np.testing.assert_allclose(d, [0.25, 1.0, 1.0])
+
+
+# ------------------------------------------------------------------ the model
+#: The unstable period-1 orbit past Fig. 6's upper fold (continue_orbit from eta = 3.2
+#: through the fold at 3.3236646195, the unstable point with |mu| closest to 5;
+#: scripts/basins_manifold.py fold): mu = 4.713, the other multipliers ~1e-8 and ~1e-13.
+FOLD_ETA = 3.323654117482133
+FOLD_SADDLE = [0.07259114445455046, 0.0, 0.12216932570735764, -0.006665729137139496]
+
+
+@pytest.fixture(scope="module")
+def fold_saddle():
+    s = ssf.System.preset("asymmetric", eta=FOLD_ETA)
+    orb = ssf.find_orbit(s, FOLD_SADDLE, period=1)
+    assert orb.converged and not orb.stable and abs(orb.multipliers[0]) == pytest.approx(4.713, abs=1e-3)
+    return orb
+
+
+def test_plane_crossings_equal_the_return_map(fold_saddle):
+    from stickslip_fast.bifurcation.returnmap import return_map
+    from stickslip_fast.bifurcation.stable_manifold import plane_crossings
+
+    z = np.array([0.05, 0.0, 0.1, 0.0])
+    st, pts, _, _ = return_map(fold_saddle.system, z, 3, tangents=False)
+    assert st == "ok"
+    np.testing.assert_array_equal(plane_crossings(fold_saddle.system, z, 3)[0], pts[:, [0, 2, 3]])

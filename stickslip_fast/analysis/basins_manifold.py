@@ -434,8 +434,10 @@ def trace_manifold(
     max_angle : float
         Largest turn (radians) between consecutive secants; a larger one halves ds.
     seed_radius, skip_radius : float
-        Largest correction of a seed (default 10 ds); a seed closer than
-        ``skip_radius`` (default 2 ds) to a curve already traced is skipped.
+        Largest correction of a seed (default 10 ds); a seed whose corrected
+        point is closer than ``skip_radius`` (default ds / 100) to a curve already
+        traced is skipped (the plane may hold many pieces of W^s close together:
+        the preimages of different order n).
 
     Returns
     -------
@@ -452,12 +454,12 @@ def trace_manifold(
     status: list = []
     seed_status: list = []
     for uv0 in np.atleast_2d(np.asarray(seeds, dtype=float)):
-        if branches and _near_any(branches, uv0, skip_radius or 2 * ds):
-            seed_status.append("skipped")
-            continue
         start, t = _seed(cond, uv0, o)
         if start is None:
             seed_status.append(t)
+            continue
+        if branches and _near_any(branches, start[0], skip_radius or 1e-2 * ds):
+            seed_status.append("skipped")  # its curve is traced already
             continue
         seed_status.append("traced")
         for sign in (1.0, -1.0):
@@ -470,7 +472,18 @@ def trace_manifold(
 
 
 def _near_any(branches: list, uv: np.ndarray, radius: float) -> bool:
-    return any(np.linalg.norm(p[0] - uv) < radius for b in branches for p in b)
+    """Is uv within ``radius`` of a traced branch (of its polyline)?"""
+    for b in branches:
+        c = np.array([p[0] for p in b])
+        if len(c) == 1:
+            if np.linalg.norm(c[0] - uv) < radius:
+                return True
+            continue
+        seg = c[1:] - c[:-1]
+        t = np.clip(np.einsum("sd,sd->s", uv - c[:-1], seg) / np.einsum("sd,sd->s", seg, seg), 0, 1)
+        if np.min(np.linalg.norm(c[:-1] + t[:, None] * seg - uv, axis=1)) < radius:
+            return True
+    return False
 
 
 def _collect(branches: list, status: list, seed_status: list, n_evals: int, d: int) -> dict:
