@@ -119,7 +119,11 @@ FOLD_SADDLE = [0.07259114445455046, 0.0, 0.12216932570735764, -0.006665729137139
 def fold_saddle():
     s = ssf.System.preset("asymmetric", eta=FOLD_ETA)
     orb = ssf.find_orbit(s, FOLD_SADDLE, period=1)
-    assert orb.converged and not orb.stable and abs(orb.multipliers[0]) == pytest.approx(4.713, abs=1e-3)
+    assert (
+        orb.converged
+        and not orb.stable
+        and abs(orb.multipliers[0]) == pytest.approx(4.713, abs=1e-3)
+    )
     return orb
 
 
@@ -131,3 +135,44 @@ def test_plane_crossings_equal_the_return_map(fold_saddle):
     st, pts, _, _ = return_map(fold_saddle.system, z, 3, tangents=False)
     assert st == "ok"
     np.testing.assert_array_equal(plane_crossings(fold_saddle.system, z, 3)[0], pts[:, [0, 2, 3]])
+
+
+def test_model_curve_lands_on_the_saddle_and_separates_two_basins(fold_saddle, tmp_path):
+    import h5py
+
+    from stickslip_fast.analysis.census import census
+    from stickslip_fast.bifurcation.stable_manifold import plane_crossings
+
+    s = fold_saddle.system
+    seed = np.array([0.0677029, -0.14516129])  # a refined boundary point of the 32 x 32 map
+    box = np.stack([seed - 1e-3, seed + 1e-3], axis=1)
+    m = ssf.stable_manifold(s, fold_saddle, plane=("x1", "phi1"), bounds=box, seeds=[seed],
+                            ds=4e-4, r_local=1e-6, n_max=12, max_points=3)  # fmt: skip
+    assert m.settings["seed_status"] == ["traced"] and len(m.u) >= 4
+    assert np.all(m.distance <= 1e-6) and np.all(m.residual < 1e-9)
+    assert m.mu[0] == pytest.approx(4.713, abs=1e-3)
+    # on W^s: the later crossings stay at the saddle; 1e-6 off the curve they leave it
+    p = m.uv[1]
+    t = m.uv[2] - m.uv[1]
+    nrm = np.array([-t[1], t[0]]) / np.linalg.norm(t)
+    n = int(m.n[1]) + 3
+    x = np.delete(np.array(FOLD_SADDLE), 1)
+    on = plane_crossings(s, [p[0], 0, p[1], 0], n)[0, -1]
+    off = plane_crossings(s, [p[0] + 1e-6 * nrm[0], 0, p[1] + 1e-6 * nrm[1], 0], n)[0, -1]
+    assert np.max(np.abs(on - x)) < 1e-9 and np.max(np.abs(off - x)) > 1e3 * np.max(np.abs(on - x))
+    # the two sides reach different attractors: steady sliding and the stable P1 orbit
+    starts = [[p[0] + d * nrm[0], 0, p[1] + d * nrm[1], 0] for d in (1e-5, -1e-5)]
+    c = census(s, "eta", [s.eta], starts=starts, t_end=3000.0, stop="converged", progress=False)
+    kind = {a.id: a.kind for a in c.attractors[0]}
+    kinds = sorted(kind[lab] for lab in c.labels[0])
+    assert kinds == ["equilibrium", "orbit"]
+    # the record's round trip through a file
+    with h5py.File(tmp_path / "m.h5", "w") as h5:
+        g = h5.create_group("basins")
+        g["state"] = np.array(s.state_names, dtype=object)
+        m.to_group(g.create_group("manifold"))
+    with h5py.File(tmp_path / "m.h5", "r") as h5:
+        back = StableManifold.from_group(h5["basins/manifold"])
+    np.testing.assert_array_equal(back.uv, m.uv)
+    np.testing.assert_array_equal(back.n, m.n)
+    assert back.branch_status == m.branch_status and back.settings == m.settings
