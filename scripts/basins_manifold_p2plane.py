@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import time
 
+import basins_manifold as bmf  # noqa: E402  (scripts/ on sys.path when run from there)
 import numpy as np
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis.census import census
-
-import basins_manifold as bmf  # noqa: E402  (scripts/ on sys.path when run from there)
 
 if __name__ == "__main__":
     t0 = time.time()

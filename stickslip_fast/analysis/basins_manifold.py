@@ -145,25 +145,12 @@ class StableManifold:
         return np.stack([self.u, self.v], axis=1)
 
     def distance_to(self, uv: Any) -> np.ndarray:
-        """Distance (Euclidean, plane units) of each point ``uv`` (k, 2) to the traced curve.
-
-        The curve is the polyline of each branch (a single point for a branch of one)."""
+        """Distance (Euclidean, plane units) of each point ``uv`` (k, 2) to the traced curve
+        (the polyline of each branch)."""
         q = np.atleast_2d(np.asarray(uv, dtype=float))
-        best = np.full(len(q), np.inf)
         pts = self.uv
-        for b in np.unique(self.branch):
-            c = pts[self.branch == b]
-            if len(c) == 1:
-                best = np.minimum(best, np.linalg.norm(q - c[0], axis=1))
-                continue
-            a, e = c[:-1], c[1:]
-            seg = e - a
-            t = np.einsum("ksd,sd->ks", q[:, None, :] - a[None], seg) / np.maximum(
-                np.einsum("sd,sd->s", seg, seg), 1e-300
-            )
-            proj = a[None] + np.clip(t, 0.0, 1.0)[..., None] * seg[None]
-            best = np.minimum(best, np.min(np.linalg.norm(q[:, None, :] - proj, axis=2), axis=1))
-        return best
+        d = [_polyline_distance(q, pts[self.branch == b]) for b in np.unique(self.branch)]
+        return np.min(d, axis=0) if d else np.full(len(q), np.inf)
 
     def to_group(self, g: Any) -> None:
         from ..io.basins import write_group
@@ -273,8 +260,7 @@ def _illinois(cond, q, nrm, n, j, lo, hi, tol, max_iter: int = 80) -> tuple | No
     """Illinois regula falsi on a sign-change bracket ``lo``, ``hi`` = (s, (g, dist)); returns
     (s, g, dist) at the end with the smaller |g| once the bracket is shorter than ``tol``."""
     (a, fa), (b, fb) = lo, hi
-    ga, gb = fa[0], fb[0]
-    side = 0
+    ga, gb, side = fa[0], fb[0], 0
     for _ in range(max_iter):
         if abs(b - a) <= tol:
             break
@@ -450,15 +436,22 @@ def trace_manifold(
              n_max=int(n_max), max_points=int(max_points), max_angle=max_angle,
              seed_radius=seed_radius or 10 * ds, h=max(64 * tol, 1e-3 * ds))  # fmt: skip
     cond = _Condition(crossings, saddles, int(period))
+    branches, status, seed_status = _trace_seeds(cond, seeds, box, o, skip_radius or 1e-2 * ds)
+    return _collect(branches, status, seed_status, cond.n_evals)
+
+
+def _trace_seeds(cond: _Condition, seeds: Any, box: np.ndarray, o: dict, skip: float) -> tuple:
+    """Correct each seed onto the curve and trace it both ways: (branches, why each
+    ended, what became of each seed)."""
     branches: list = []
     status: list = []
-    seed_status: list = []
+    seed_status: list = []  # "traced", "skipped" or why the seed could not be corrected
     for uv0 in np.atleast_2d(np.asarray(seeds, dtype=float)):
         start, t = _seed(cond, uv0, o)
         if start is None:
             seed_status.append(t)
             continue
-        if branches and _near_any(branches, start[0], skip_radius or 1e-2 * ds):
+        if branches and _near_any(branches, start[0], skip):
             seed_status.append("skipped")  # its curve is traced already
             continue
         seed_status.append("traced")
@@ -468,25 +461,28 @@ def trace_manifold(
             status.append(why)
             if why == "closed":  # the whole loop: no other half
                 break
-    return _collect(branches, status, seed_status, cond.n_evals, len(saddles[0].point))
+    return branches, status, seed_status
 
 
 def _near_any(branches: list, uv: np.ndarray, radius: float) -> bool:
     """Is uv within ``radius`` of a traced branch (of its polyline)?"""
-    for b in branches:
-        c = np.array([p[0] for p in b])
-        if len(c) == 1:
-            if np.linalg.norm(c[0] - uv) < radius:
-                return True
-            continue
-        seg = c[1:] - c[:-1]
-        t = np.clip(np.einsum("sd,sd->s", uv - c[:-1], seg) / np.einsum("sd,sd->s", seg, seg), 0, 1)
-        if np.min(np.linalg.norm(c[:-1] + t[:, None] * seg - uv, axis=1)) < radius:
-            return True
-    return False
+    q = uv[None]
+    return any(_polyline_distance(q, np.array([p[0] for p in b]))[0] < radius for b in branches)
 
 
-def _collect(branches: list, status: list, seed_status: list, n_evals: int, d: int) -> dict:
+def _polyline_distance(q: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Distance of the points q (k, 2) to the polyline through c (m, 2) (a point if m = 1)."""
+    if len(c) == 1:
+        return np.linalg.norm(q - c[0], axis=1)
+    a, seg = c[:-1], c[1:] - c[:-1]
+    t = np.einsum("ksd,sd->ks", q[:, None, :] - a[None], seg) / np.maximum(
+        np.einsum("sd,sd->s", seg, seg), 1e-300
+    )
+    proj = a[None] + np.clip(t, 0.0, 1.0)[..., None] * seg[None]
+    return np.min(np.linalg.norm(q[:, None, :] - proj, axis=2), axis=1)
+
+
+def _collect(branches: list, status: list, seed_status: list, n_evals: int) -> dict:
     rows = [(k, *p) for k, b in enumerate(branches) for p in b]
     return {
         "uv": np.array([r[1] for r in rows]).reshape(-1, 2),
