@@ -3,18 +3,24 @@
 At eta = 9.73102 the rest-plane map has no P2 cell (every start slides), so the
 manifold is traced in the plane through the saddle's first point (its other
 coordinates kept), seeded at the saddle itself; both sides of the curve are then
-run to their attractors. Needs out/basins/p2_saddle.json (scripts/basins_manifold.py p2).
+run to their attractors. Run from the repository root: ``python3
+scripts/basins_manifold_p2plane.py`` (finds the saddle as ``basins_manifold.py p2``
+does, or reads its cache out/basins/p2_saddle.json).
 """
 
 from __future__ import annotations
 
+import sys
 import time
+from pathlib import Path
 
-import basins_manifold as bmf  # noqa: E402  (scripts/ on sys.path when run from there)
 import numpy as np
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis.census import census
+
+sys.path.insert(0, str(Path(__file__).parent))
+import basins_manifold as bmf  # noqa: E402
 
 if __name__ == "__main__":
     t0 = time.time()
@@ -27,7 +33,7 @@ if __name__ == "__main__":
     print(f"manifold: {len(m.u)} points, branches {m.branch_status}, n {np.unique(m.n)}, "
           f"seeds {m.settings['seed_status']}, residual <= {m.residual.max():.1e}, "
           f"[{time.time() - t0:.0f} s]")  # fmt: skip
-    np.savez("out/basins/p2_plane_manifold.npz", u=m.u, v=m.v, branch=m.branch, n=m.n, z=z)
+    np.savez(bmf.OUT / "p2_plane_manifold.npz", u=m.u, v=m.v, branch=m.branch, n=m.n, z=z)
     k = np.linspace(0, len(m.u) - 2, 5).astype(int)
     starts = []
     for i in k:
