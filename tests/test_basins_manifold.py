@@ -8,8 +8,9 @@ either side of it escape in opposite directions (the two "basins"). For the mode
 the unstable period-1 orbit past Fig. 6's upper fold, whose points on the traced curve
 are mapped by P^n to within r_local of the saddle along its stable directions, and
 whose two sides reach different attractors; the record's round trip through a file.
-Cost: about 2 s each for the maps; the model tests took 313 s cold (Numba compilation
-included) on the loaded 2-core VM; warm not measured.
+Cost: about 2 s each for the maps, under 2 s for each model test; the model fixture's
+find_orbit compiles the orbit kernels when their cache is cold (222 s on the loaded
+2-core VM).
 """
 
 import numpy as np
