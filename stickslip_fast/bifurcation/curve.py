@@ -1,5 +1,6 @@
-"""Two-parameter continuation of a fold or period-doubling of periodic orbits, or of a
-fold or Hopf point of equilibria (:mod:`.eqcurve`): ``Curve``.
+"""Two-parameter continuation of a fold, period-doubling or Neimark-Sacker point of periodic
+orbits (:mod:`.foldcurve`, :mod:`.nscurve`), or of a fold or Hopf point of equilibria
+(:mod:`.eqcurve`): ``Curve``.
 
 :func:`continue_bifurcation` starts from a bifurcation located on a one-parameter orbit
 branch (:func:`~stickslip_fast.continue_orbit`) and follows it in a second
@@ -21,6 +22,7 @@ from .curverecord import Codim2Point, Curve
 from .detection import _sorted_eigs
 from .eqcurve import EQUILIBRIUM_CURVE_KINDS, continue_equilibrium_curve
 from .foldcurve import CURVE_KINDS, follow_curve
+from .nscurve import NS_KIND, follow_ns_curve
 from .returnmap import SECTION_INDEX, return_map
 
 
@@ -71,8 +73,8 @@ def continue_bifurcation(
     h: float = 1e-7,
     lyap_step: float | None = None,
 ) -> Curve:
-    """Follow a fold or period-doubling of periodic orbits, or a fold or Hopf point of
-    equilibria, in a second parameter.
+    """Follow a fold, period-doubling or Neimark-Sacker point of periodic orbits, or a fold
+    or Hopf point of equilibria, in a second parameter.
 
     Parameters
     ----------
@@ -80,8 +82,10 @@ def continue_bifurcation(
         An orbit branch from :func:`~stickslip_fast.continue_orbit`, or an equilibrium
         branch from :func:`~stickslip_fast.continue_equilibrium` (``period == 0``).
     bifurcation : Bifurcation
-        One of ``branch.bifurcations``, of kind "fold" or "period-doubling" (orbits),
-        "fold" or "hopf" (equilibria).
+        One of ``branch.bifurcations``, of kind "fold", "period-doubling" or
+        "neimark-sacker" (orbits; :mod:`~stickslip_fast.bifurcation.nscurve`: the angle
+        theta of the multipliers e^{+-i theta} is an unknown, ``Curve.theta``), "fold"
+        or "hopf" (equilibria).
     param2 : str
         A :class:`System` field other than ``branch.param``.
     bounds2 : (float, float)
@@ -134,11 +138,21 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
     base, periods = _two_param_evaluator(system0, branch.param, param2, p, rtol, atol, fd_step)
     mask = np.arange(system0.n_state) != SECTION_INDEX
     x0 = np.r_[bifurcation.point[mask], bifurcation.value, getattr(system0, param2)]
-    xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
-                                                spectrum=_sorted_eigs, **settings)  # fmt: skip
     n = system0.n_state
+    theta = None
+    if kind == NS_KIND:
+        xs, mults, codim2, status = follow_ns_curve(base, x0, direction, bounds2, h=h,
+                                                    **settings)  # fmt: skip
+        if xs is not None:  # x = (z, theta, l1, l2): theta apart
+            theta = xs[:, n - 1].copy()
+            xs = np.delete(xs, n - 1, axis=1)
+            codim2 = [(k, i, np.delete(x, n - 1)) for k, i, x in codim2]
+    else:
+        xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
+                                                    spectrum=_sorted_eigs, **settings)  # fmt: skip
     if xs is None:
         xs, mults = x0[None, :], np.full((1, n - 1), np.nan, complex)
+        theta = None if kind != NS_KIND else np.full(1, np.nan)
 
     def full(x):
         z = np.zeros(n)
@@ -151,14 +165,14 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
         values=xs[:, -2:].copy(), points=np.array([full(x) for x in xs]), T=T,
         multipliers=mults,
         codim2=[Codim2Point(k, x[-2:].copy(), i, full(x)) for k, i, x in codim2],
-        status=status,
+        status=status, theta=theta,
     )  # fmt: skip
 
 
 def _check(branch, bifurcation, param2, bounds2):
     if not isinstance(branch, Branch) or branch.period < 0:
         raise ValueError("branch must be a Branch from continue_orbit or continue_equilibrium")
-    kinds = sorted(CURVE_KINDS) if branch.period else list(EQUILIBRIUM_CURVE_KINDS)
+    kinds = sorted([*CURVE_KINDS, NS_KIND]) if branch.period else list(EQUILIBRIUM_CURVE_KINDS)
     if not isinstance(bifurcation, Bifurcation) or bifurcation.kind not in kinds:
         what = "an orbit" if branch.period else "an equilibrium"
         raise ValueError(f"bifurcation must be a Bifurcation of kind {kinds} ({what} branch), "
