@@ -34,8 +34,8 @@ class Curve:
     param, param2 : str
         The branch's parameter and the second one.
     kind : str
-        The codim-1 kind followed: "fold", "period-doubling" or "neimark-sacker"
-        (orbits), "fold" or "hopf" (equilibria).
+        The codim-1 kind followed: "fold", "period-doubling", "neimark-sacker" or
+        "stick-phase" (orbits), "fold" or "hopf" (equilibria).
     period : int
         Section crossings per period of the orbits; 0 for equilibria.
     values : ndarray, shape (k, 2)
@@ -69,6 +69,13 @@ class Curve:
     theta : ndarray, shape (k,), optional
         Neimark-Sacker curves: the angle of the critical multipliers e^{+-i theta}, in
         [0, pi] (None on other curves).
+    event : dict, optional
+        Stick-phase curves (:mod:`~stickslip_fast.bifurcation.stickcurve`): the
+        slip-speed extremum followed, ``{"disk": int (0-based), "extremum": "min" or
+        "max", "threshold": the stick speed in units of eps}`` (None on other curves).
+    event_time : ndarray, shape (k,), optional
+        Stick-phase curves: the time t* of the extremum after the orbit's point on the
+        section (``points``).
     """
 
     system: Any
@@ -83,6 +90,8 @@ class Curve:
     codim2: list[Codim2Point] = field(default_factory=list)
     status: str = ""
     theta: np.ndarray | None = None
+    event: dict | None = None
+    event_time: np.ndarray | None = None
 
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the curve (schema: docs/file-format.md, "Curve files")."""
@@ -98,6 +107,8 @@ class Curve:
             "codim2_values": [c.values for c in self.codim2],
             "codim2_index": [c.index for c in self.codim2],
             "codim2_point": [c.point for c in self.codim2], "theta": self.theta,
+            "event_time": self.event_time,
+            "event": None if self.event is None else json.dumps(self.event),
         })  # fmt: skip
 
     @classmethod
@@ -115,4 +126,6 @@ class Curve:
             values=d["values"], points=d["points"], T=d["T"],
             multipliers=d["multipliers_real"] + 1j * d["multipliers_imag"], codim2=codim2,
             status=str(d["status"]), theta=d.get("theta"),
+            event_time=d.get("event_time"),
+            event=None if d.get("event") is None else json.loads(d["event"]),
         )  # fmt: skip

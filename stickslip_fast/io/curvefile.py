@@ -19,8 +19,12 @@ CURVE_DATASETS = ("values", "points", "T", "multipliers_real", "multipliers_imag
 CURVE_ATTRS = ("param", "param2", "curve_kind", "period", "status", "system")
 
 #: Datasets present only on some kinds of curve (absent, or None in the dict, elsewhere):
-#: "theta" (k,) of a Neimark-Sacker curve.
-CURVE_OPTIONAL = ("theta",)
+#: "theta" (k,) of a Neimark-Sacker curve, "event_time" (k,) of a stick-phase curve.
+CURVE_OPTIONAL = ("theta", "event_time")
+
+#: Attributes present only on some kinds of curve: "event" (a JSON string) of a
+#: stick-phase curve.
+CURVE_OPTIONAL_ATTRS = ("event",)
 
 
 def write_curve(path: str | Path, data: dict[str, Any]) -> Path:
@@ -46,6 +50,9 @@ def write_curve(path: str | Path, data: dict[str, Any]) -> Path:
             for name in CURVE_OPTIONAL:
                 if data.get(name) is not None:
                     h5[name] = np.asarray(data[name], dtype="f8")
+            for name in CURVE_OPTIONAL_ATTRS:
+                if data.get(name) is not None:
+                    h5.attrs[name] = data[name]
         tmp.replace(path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -78,4 +85,6 @@ def read_curve(path: str | Path) -> dict[str, Any]:
             out[name] = h5[name][()]
         for name in CURVE_OPTIONAL:
             out[name] = h5[name][()] if name in h5 else None
+        for name in CURVE_OPTIONAL_ATTRS:
+            out[name] = h5.attrs[name] if name in h5.attrs else None
     return out
