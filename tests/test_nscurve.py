@@ -87,3 +87,23 @@ def test_no_complex_pair_is_reported():
     x0 = np.array([0.1, 0.1, 0.0, 0.7, 3.0])  # determinant 0.5, trace 3: real multipliers
     xs, _, _, status = follow_ns_curve(family, x0, 1, (2.5, 3.5), **KW)
     assert xs is None and status == "no-complex-pair"
+
+
+def test_curve_file_round_trip_of_the_optional_fields(tmp_path):
+    import stickslip_fast as ssf
+
+    s = ssf.System.preset("asymmetric", eta=3.3)
+    common = dict(
+        system=s, param="eta", param2="k12", period=1, values=np.array([[3.3, -0.8]]),
+        points=np.arange(4.0)[None, :], T=np.array([14.0]),
+        multipliers=np.array([[np.exp(1j), np.exp(-1j), 0.1]]), status="bounds",
+    )  # fmt: skip
+    ns = ssf.Curve(kind="neimark-sacker", theta=np.array([1.0]), **common)
+    back = ssf.Curve.from_hdf5(ns.to_hdf5(tmp_path / "ns.h5"))
+    np.testing.assert_array_equal(back.theta, [1.0])
+    assert back.event is None and back.event_time is None
+    event = {"disk": 0, "extremum": "min", "threshold": 100.0}
+    st = ssf.Curve(kind="stick-phase", event=event, event_time=np.array([2.5]), **common)
+    back = ssf.Curve.from_hdf5(st.to_hdf5(tmp_path / "st.h5"))
+    assert back.kind == "stick-phase" and back.event == event and back.theta is None
+    np.testing.assert_array_equal(back.event_time, [2.5])
