@@ -19,7 +19,7 @@ the orbit's point on the section, at each shifted x).
 t*: the trajectory from z is sampled on a window around the last t* (the extremum of the
 same kind nearest it), and q(t) = u . du/dt (u = the slip velocity vector; ds^2/dt = 2 q)
 is solved between the neighbouring samples by Brent's method, each trial integrated from
-z. The curve ends ("lost") where that extremum is no longer found.
+the state at the first of them (itself integrated from z, not interpolated). The curve ends ("lost") where that extremum is no longer found.
 """
 
 from __future__ import annotations
@@ -99,15 +99,17 @@ def slip_extremum(system: System, z: np.ndarray, t_guess: float, width: float, d
         raise ValueError(f"no slip-speed {extremum} of disk {disk} near t = {t_guess:g}")
     k = int(k[np.argmin(np.abs(t[k] - t_guess))])
 
-    def q(tt):
-        return sign * _slip(system, _state(system, z, tt, rtol, atol), disk)[1]
-
     a, b = t[k - 1], t[k + 1]
-    qa, qb = sign * _slip(system, ys[k - 1], disk)[1], sign * _slip(system, ys[k + 1], disk)[1]
+    ya = _state(system, z, a, rtol, atol)  # integrated, not the interpolated sample
+
+    def q(tt):
+        return sign * _slip(system, _state(system, ya, tt - a, rtol, atol), disk)[1]
+
+    qa, qb = q(a), sign * _slip(system, ys[k + 1], disk)[1]
     if not (qa < 0 < qb):
         raise ValueError(f"the slip-speed {extremum} of disk {disk} is not bracketed")
     ts = brentq(q, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
-    return float(ts), _slip(system, _state(system, z, ts, rtol, atol), disk)[0]
+    return float(ts), _slip(system, _state(system, ya, ts - a, rtol, atol), disk)[0]
 
 
 def nearest_stick_event(system: System, point: np.ndarray, T: float, *,
