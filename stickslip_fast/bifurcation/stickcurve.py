@@ -42,6 +42,11 @@ from .stickphases import STICK_SPEED
 STICK_KIND = "stick-phase"
 
 
+#: The simulation statuses of a completed run (a window too short for a section crossing
+#: ends with "no-crossings").
+_FINE = ("ok", "no-crossings")
+
+
 @dataclass
 class StickEvent:
     """The slip-speed extremum a stick-phase event is made of: ``disk`` (0-based),
@@ -69,7 +74,7 @@ def _samples(system, z, t0, t1, n, rtol, atol):
     dt = (t1 - t0) / n
     r = simulate(system, t1 + 0.5 * dt, t_transient=t0, y0=z, sample_dt=dt, rtol=rtol,
                  atol=atol, max_points=0)  # fmt: skip
-    if r.status != "ok" or r.y.shape[0] < n + 1:
+    if r.status not in _FINE or r.y.shape[0] < n + 1:
         raise ValueError(f"the orbit could not be sampled (status {r.status!r})")
     return t0 + dt * np.arange(n + 1), r.y[: n + 1]
 
@@ -78,7 +83,7 @@ def _state(system, z, t, rtol, atol):
     if t <= 0:
         return np.array(z, float)
     r = simulate(system, t, y0=z, rtol=rtol, atol=atol, max_points=0)
-    if r.status != "ok":
+    if r.status not in _FINE:
         raise ValueError(f"the orbit could not be integrated (status {r.status!r})")
     return r.final_state
 
