@@ -65,7 +65,8 @@ class Curve:
     status : str
         How the curve ended (:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s
         statuses, or "start-failed"; a Neimark-Sacker curve also "1:1" or "1:2": it
-        ended at that resonance, its last point).
+        ended at that resonance, its last point; or "no-complex-pair": the start has
+        no complex multipliers).
     theta : ndarray, shape (k,), optional
         Neimark-Sacker curves: the angle of the critical multipliers e^{+-i theta}, in
         [0, pi] (None on other curves).
