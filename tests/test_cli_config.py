@@ -65,6 +65,12 @@ def _write(tmp_path, text, name="c.toml"):
             "direction2 = 2",
             "direction2",
         ),
+        (
+            "[continue]\nparam = 'eta'\nbounds = [1, 2]\nparam2 = 'k12'\nbounds2 = [-1, 0]\n"
+            "kinds2 = ['hopf']",
+            "kinds2",
+        ),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nkinds2 = ['fold']", "kinds2 need param2"),
     ],
 )
 def test_bad_config_names_the_key(tmp_path, text, match):
@@ -77,7 +83,9 @@ def test_continue_table_takes_the_issue_28_keys(tmp_path):
             "param2 = 'k12'\nbounds2 = [-0.9, -0.7]\ndirection2 = -1")  # fmt: skip
     c = load_config(_write(tmp_path, text)).continuation
     assert (c["shooting"], c["segments"], c["param2"]) == ("auto", 12, "k12")
-    assert c["bounds2"] == (-0.9, -0.7) and c["direction2"] == -1.0
+    assert c["bounds2"] == (-0.9, -0.7) and c["direction2"] == -1.0 and "kinds2" not in c
+    c = load_config(_write(tmp_path, text + "\nkinds2 = ['neimark-sacker', 'stick-phase']"))
+    assert c.continuation["kinds2"] == ("neimark-sacker", "stick-phase")
 
 
 def test_param2_for_an_equilibrium_continuation(tmp_path):

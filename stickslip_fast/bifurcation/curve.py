@@ -1,5 +1,6 @@
-"""Two-parameter continuation of a fold or period-doubling of periodic orbits, or of a
-fold or Hopf point of equilibria (:mod:`.eqcurve`): ``Curve``.
+"""Two-parameter continuation of a fold, period-doubling or Neimark-Sacker point of periodic
+orbits (:mod:`.foldcurve`, :mod:`.nscurve`), or of a fold or Hopf point of equilibria
+(:mod:`.eqcurve`): ``Curve``.
 
 :func:`continue_bifurcation` starts from a bifurcation located on a one-parameter orbit
 branch (:func:`~stickslip_fast.continue_orbit`) and follows it in a second
@@ -21,7 +22,9 @@ from .curverecord import Codim2Point, Curve
 from .detection import _sorted_eigs
 from .eqcurve import EQUILIBRIUM_CURVE_KINDS, continue_equilibrium_curve
 from .foldcurve import CURVE_KINDS, follow_curve
+from .nscurve import NS_KIND, follow_ns_curve
 from .returnmap import SECTION_INDEX, return_map
+from .stickcurve import STICK_KIND, follow_stick_curve, nearest_stick_event
 
 
 def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
@@ -71,8 +74,8 @@ def continue_bifurcation(
     h: float = 1e-7,
     lyap_step: float | None = None,
 ) -> Curve:
-    """Follow a fold or period-doubling of periodic orbits, or a fold or Hopf point of
-    equilibria, in a second parameter.
+    """Follow a fold, period-doubling or Neimark-Sacker point of periodic orbits, or a fold
+    or Hopf point of equilibria, in a second parameter.
 
     Parameters
     ----------
@@ -80,8 +83,10 @@ def continue_bifurcation(
         An orbit branch from :func:`~stickslip_fast.continue_orbit`, or an equilibrium
         branch from :func:`~stickslip_fast.continue_equilibrium` (``period == 0``).
     bifurcation : Bifurcation
-        One of ``branch.bifurcations``, of kind "fold" or "period-doubling" (orbits),
-        "fold" or "hopf" (equilibria).
+        One of ``branch.bifurcations``, of kind "fold", "period-doubling" or
+        "neimark-sacker" (orbits; :mod:`~stickslip_fast.bifurcation.nscurve`: the angle
+        theta of the multipliers e^{+-i theta} is an unknown, ``Curve.theta``), "fold"
+        or "hopf" (equilibria).
     param2 : str
         A :class:`System` field other than ``branch.param``.
     bounds2 : (float, float)
@@ -130,35 +135,76 @@ def continue_bifurcation(
 def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings):
     """:func:`continue_bifurcation` for an orbit branch (arguments checked)."""
     rtol, atol, fd_step, h = steps
-    kind, p = bifurcation.kind, branch.period
+    kind, p, n = bifurcation.kind, branch.period, system0.n_state
     base, periods = _two_param_evaluator(system0, branch.param, param2, p, rtol, atol, fd_step)
-    mask = np.arange(system0.n_state) != SECTION_INDEX
+    mask = np.arange(n) != SECTION_INDEX
     x0 = np.r_[bifurcation.point[mask], bifurcation.value, getattr(system0, param2)]
-    xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
-                                                spectrum=_sorted_eigs, **settings)  # fmt: skip
-    n = system0.n_state
-    if xs is None:
-        xs, mults = x0[None, :], np.full((1, n - 1), np.nan, complex)
 
     def full(x):
         z = np.zeros(n)
         z[mask] = x[:-2]
         return z
 
+    extra = {}
+    if kind == NS_KIND:
+        xs, mults, codim2, status = follow_ns_curve(base, x0, direction, bounds2, h=h,
+                                                    **settings)  # fmt: skip
+        extra["theta"] = np.full(1, np.nan)
+        if xs is not None:  # x = (z, theta, l1, l2): theta apart
+            extra["theta"] = xs[:, n - 1].copy()
+            xs = np.delete(xs, n - 1, axis=1)
+            codim2 = [(k, i, np.delete(x, n - 1)) for k, i, x in codim2]
+    elif kind == STICK_KIND:
+        xs, mults, codim2, status, extra = _stick(branch, bifurcation, param2, system0, x0,
+                                                  base, full, direction, bounds2,
+                                                  (rtol, atol, fd_step), settings)  # fmt: skip
+    else:
+        xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
+                                                    spectrum=_sorted_eigs, **settings)  # fmt: skip
+    if xs is None:
+        xs, mults = x0[None, :], np.full((1, n - 1), np.nan, complex)
     T = np.array([periods.get(x.tobytes(), math.nan) for x in xs])
     return Curve(
         system=system0, param=branch.param, param2=param2, kind=kind, period=p,
         values=xs[:, -2:].copy(), points=np.array([full(x) for x in xs]), T=T,
         multipliers=mults,
         codim2=[Codim2Point(k, x[-2:].copy(), i, full(x)) for k, i, x in codim2],
-        status=status,
+        status=status, **extra,
     )  # fmt: skip
+
+
+def _stick(branch, bifurcation, param2, system0, x0, base, full, direction, bounds2, steps,
+           settings):  # fmt: skip
+    """The stick-phase event curve (:mod:`.stickcurve`) through the branch's event: the
+    slip-speed extremum of the orbit at the event nearest the stick threshold, followed."""
+    rtol, atol, fd_step = steps
+    st, _, times, _ = return_map(system0, bifurcation.point, branch.period, rtol=rtol,
+                                 atol=atol, tangents=False)  # fmt: skip
+    if st != "ok":
+        return None, None, [], "start-failed", {"event_time": np.full(1, np.nan)}
+    T0 = float(times[-1])
+    event = nearest_stick_event(system0, bifurcation.point, T0, rtol=rtol, atol=atol)
+    info = {"disk": event.disk, "extremum": event.extremum, "threshold": event.threshold}
+
+    def system_at(x):
+        return dataclasses.replace(system0, **{branch.param: float(x[-2]), param2: float(x[-1])})
+
+    xs, mults, codim2, status, t_star = follow_stick_curve(
+        base, system_at, full, x0, event, direction, bounds2, width=0.01 * T0,
+        fd_step=max(fd_step, 1e-6), rtol=rtol, atol=atol, **settings,
+    )  # fmt: skip
+    t_star = np.full(1, np.nan) if t_star is None else t_star
+    return xs, mults, codim2, status, {"event": info, "event_time": t_star}
 
 
 def _check(branch, bifurcation, param2, bounds2):
     if not isinstance(branch, Branch) or branch.period < 0:
         raise ValueError("branch must be a Branch from continue_orbit or continue_equilibrium")
-    kinds = sorted(CURVE_KINDS) if branch.period else list(EQUILIBRIUM_CURVE_KINDS)
+    kinds = (
+        sorted([*CURVE_KINDS, NS_KIND, STICK_KIND])
+        if branch.period
+        else list(EQUILIBRIUM_CURVE_KINDS)
+    )
     if not isinstance(bifurcation, Bifurcation) or bifurcation.kind not in kinds:
         what = "an orbit" if branch.period else "an equilibrium"
         raise ValueError(f"bifurcation must be a Bifurcation of kind {kinds} ({what} branch), "

@@ -34,8 +34,8 @@ class Curve:
     param, param2 : str
         The branch's parameter and the second one.
     kind : str
-        The codim-1 kind followed: "fold" or "period-doubling" (orbits), "fold" or
-        "hopf" (equilibria).
+        The codim-1 kind followed: "fold", "period-doubling", "neimark-sacker" or
+        "stick-phase" (orbits), "fold" or "hopf" (equilibria).
     period : int
         Section crossings per period of the orbits; 0 for equilibria.
     values : ndarray, shape (k, 2)
@@ -54,14 +54,29 @@ class Curve:
         "extremum" (the curve turns back in ``param2``: beyond it, at fixed ``param2``,
         the two codim-1 points met and vanished). Orbits (the second multiplier):
         "1:1" (+1 on a fold curve), "fold-flip" (-1 on a fold curve, +1 on a
-        period-doubling curve), "1:2" (-1 on a period-doubling curve). Equilibria:
+        period-doubling curve), "1:2" (-1 on a period-doubling curve); on a
+        Neimark-Sacker curve (:mod:`~stickslip_fast.bifurcation.nscurve`) "1:1" and
+        "1:2" (theta = 0, pi: the curve ends there), "1:3" and "1:4" (theta = 2 pi / 3,
+        pi / 2), "fold-ns" and "flip-ns" (another multiplier at +1, -1). Equilibria:
         "bogdanov-takens" (a second zero eigenvalue on a fold curve; omega -> 0 on a
         Hopf curve), "zero-hopf" (a pair +-i omega on a fold curve; a zero eigenvalue
         on a Hopf curve), "bautin" (the Hopf curve's first Lyapunov coefficient
         changes sign).
     status : str
         How the curve ended (:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s
-        statuses, or "start-failed").
+        statuses, or "start-failed"; a Neimark-Sacker curve also "1:1" or "1:2": it
+        ended at that resonance, its last point; or "no-complex-pair": the start has
+        no complex multipliers).
+    theta : ndarray, shape (k,), optional
+        Neimark-Sacker curves: the angle of the critical multipliers e^{+-i theta}, in
+        [0, pi] (None on other curves).
+    event : dict, optional
+        Stick-phase curves (:mod:`~stickslip_fast.bifurcation.stickcurve`): the
+        slip-speed extremum followed, ``{"disk": int (0-based), "extremum": "min" or
+        "max", "threshold": the stick speed in units of eps}`` (None on other curves).
+    event_time : ndarray, shape (k,), optional
+        Stick-phase curves: the time t* of the extremum after the orbit's point on the
+        section (``points``).
     """
 
     system: Any
@@ -75,6 +90,9 @@ class Curve:
     multipliers: np.ndarray
     codim2: list[Codim2Point] = field(default_factory=list)
     status: str = ""
+    theta: np.ndarray | None = None
+    event: dict | None = None
+    event_time: np.ndarray | None = None
 
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the curve (schema: docs/file-format.md, "Curve files")."""
@@ -89,7 +107,9 @@ class Curve:
             "codim2_kind": [c.kind for c in self.codim2],
             "codim2_values": [c.values for c in self.codim2],
             "codim2_index": [c.index for c in self.codim2],
-            "codim2_point": [c.point for c in self.codim2],
+            "codim2_point": [c.point for c in self.codim2], "theta": self.theta,
+            "event_time": self.event_time,
+            "event": None if self.event is None else json.dumps(self.event),
         })  # fmt: skip
 
     @classmethod
@@ -106,5 +126,7 @@ class Curve:
             param2=str(d["param2"]), kind=str(d["curve_kind"]), period=int(d["period"]),
             values=d["values"], points=d["points"], T=d["T"],
             multipliers=d["multipliers_real"] + 1j * d["multipliers_imag"], codim2=codim2,
-            status=str(d["status"]),
+            status=str(d["status"]), theta=d.get("theta"),
+            event_time=d.get("event_time"),
+            event=None if d.get("event") is None else json.loads(d["event"]),
         )  # fmt: skip

@@ -53,7 +53,7 @@ Layout (every section optional except what the command needs)::
     direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
     # shooting = "single"|"multiple"|"auto", segments   (multiple shooting)
-    # param2, bounds2, direction2   (the codim-1 points' curves in a 2nd parameter)
+    # param2, bounds2, direction2, kinds2   (the codim-1 points' curves in a 2nd parameter)
     # switch = true       # also follow the doubled orbit from each period-doubling found
     # sharp_ends = false  # do not retry with tighter settings where the corrector fails
 
@@ -106,7 +106,7 @@ _SECTIONS = {
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
         "max_points", "tol", "switch", "sharp_ends", "shooting", "segments", "param2", "bounds2",
-        "direction2",
+        "direction2", "kinds2",
     },
 }  # fmt: skip
 
@@ -436,8 +436,8 @@ def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
             raise ConfigError(f"[continue].segments must be an integer >= 1, got {plain(v)}")
         out["segments"] = v
     if "param2" not in table:
-        if "bounds2" in table or "direction2" in table:
-            raise ConfigError("[continue].bounds2 and direction2 need param2")
+        if "bounds2" in table or "direction2" in table or "kinds2" in table:
+            raise ConfigError("[continue].bounds2, direction2 and kinds2 need param2")
         return
     p2, b2 = table["param2"], table.get("bounds2")
     if not isinstance(p2, str) or p2 not in SWEEPABLE or p2 in (out["param"], "n_oscillators"):
@@ -450,6 +450,17 @@ def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
     if isinstance(d2, bool) or d2 not in (1, -1):
         raise ConfigError(f"[continue].direction2 must be 1 or -1, got {d2!r}")
     out["param2"], out["bounds2"], out["direction2"] = p2, (float(b2[0]), float(b2[1])), float(d2)
+    if "kinds2" in table:
+        allowed = CURVE_KINDS2 if orbit else ("fold", "hopf")
+        k2 = table["kinds2"]
+        if not (isinstance(k2, list) and k2 and all(k in allowed for k in k2)):
+            raise ConfigError(f"[continue].kinds2 must be a non-empty list of {list(allowed)}, "
+                              f"got {k2!r}")  # fmt: skip
+        out["kinds2"] = tuple(k2)
+
+
+#: The kinds of an orbit branch's points [continue].kinds2 may name (default: the first three).
+CURVE_KINDS2 = ("fold", "period-doubling", "neimark-sacker", "stick-phase")
 
 
 def load_config(path: str | Path) -> RunConfig:

@@ -32,7 +32,7 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     start = c.pop("start", "orbit")
     direction = c.pop("direction", 1.0)
     switch = c.pop("switch", False)
-    curve = {k: c.pop(k) for k in ("param2", "bounds2", "direction2") if k in c}
+    curve = {k: c.pop(k) for k in ("param2", "bounds2", "direction2", "kinds2") if k in c}
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     if start == "orbit":
         first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
@@ -56,13 +56,15 @@ def _cmd_continue(args: argparse.Namespace) -> int:
 
 
 def _curves(branch, curve, tol, args, say):
-    """[continue].param2: every fold and period-doubling of an orbit ``branch`` (every fold
-    and Hopf point of an equilibrium branch) followed in param2, into OUTPUT's stem +
+    """[continue].param2: every fold, period-doubling and Neimark-Sacker point of an orbit
+    ``branch`` (every fold and Hopf point of an equilibrium branch; or the kinds of
+    [continue].kinds2, e.g. "stick-phase") followed in param2, into OUTPUT's stem +
     ``.curve<k>.h5``."""
     from ..bifurcation.curve import continue_bifurcation
 
     out = Path(args.output)
-    kinds = ("fold", "period-doubling") if branch.period else ("fold", "hopf")
+    default = ("fold", "period-doubling", "neimark-sacker") if branch.period else ("fold", "hopf")
+    kinds = curve.get("kinds2", default)
     bifs = [b for b in branch.bifurcations if b.kind in kinds]
     if not bifs:
         say(f"param2: the branch has no {' or '.join(kinds)}")

@@ -18,11 +18,19 @@ CURVE_SCHEMA = 1
 CURVE_DATASETS = ("values", "points", "T", "multipliers_real", "multipliers_imag")
 CURVE_ATTRS = ("param", "param2", "curve_kind", "period", "status", "system")
 
+#: Datasets present only on some kinds of curve (absent, or None in the dict, elsewhere):
+#: "theta" (k,) of a Neimark-Sacker curve, "event_time" (k,) of a stick-phase curve.
+CURVE_OPTIONAL = ("theta", "event_time")
+
+#: Attributes present only on some kinds of curve: "event" (a JSON string) of a
+#: stick-phase curve.
+CURVE_OPTIONAL_ATTRS = ("event",)
+
 
 def write_curve(path: str | Path, data: dict[str, Any]) -> Path:
     """Write ``data`` (the arrays of CURVE_DATASETS, ``codim2_kind`` (list of str),
     ``codim2_values`` (k, 2), ``codim2_index`` (k,), ``codim2_point`` (k, n_state), and the
-    attributes of CURVE_ATTRS) atomically (a ``.partial`` file renamed at the end)."""
+    attributes of CURVE_ATTRS; those of CURVE_OPTIONAL where not None) atomically (a ``.partial`` file renamed at the end)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".partial")
@@ -39,6 +47,12 @@ def write_curve(path: str | Path, data: dict[str, Any]) -> Path:
             h5["codim2_index"] = np.asarray(data["codim2_index"], "i8")
             n = np.asarray(data["points"]).shape[1]
             h5["codim2_point"] = np.asarray(data["codim2_point"], "f8").reshape(-1, n)
+            for name in CURVE_OPTIONAL:
+                if data.get(name) is not None:
+                    h5[name] = np.asarray(data[name], dtype="f8")
+            for name in CURVE_OPTIONAL_ATTRS:
+                if data.get(name) is not None:
+                    h5.attrs[name] = data[name]
         tmp.replace(path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -69,4 +83,8 @@ def read_curve(path: str | Path) -> dict[str, Any]:
                               for k in h5["codim2_kind"][()]]  # fmt: skip
         for name in ("codim2_values", "codim2_index", "codim2_point"):
             out[name] = h5[name][()]
+        for name in CURVE_OPTIONAL:
+            out[name] = h5[name][()] if name in h5 else None
+        for name in CURVE_OPTIONAL_ATTRS:
+            out[name] = h5.attrs[name] if name in h5.attrs else None
     return out
