@@ -154,9 +154,9 @@ class _RemeshTrigger:
     than the limit and :func:`remesh` gives another mesh (kept in ``mesh``, with the
     walk's step size and the number of its stages left)."""
 
-    def __init__(self, ms: MultiShooting) -> None:
-        self.ms, self.limit = ms, REMESH_LIMIT
-        self.mesh, self.ds, self.stages_left = None, math.nan, 0
+    def __init__(self, ms: MultiShooting, limit: float = REMESH_LIMIT) -> None:
+        self.ms, self.limit = ms, limit
+        self.mesh, self.ds, self.stages_left, self.limit_hit = None, math.nan, 0, math.nan
 
     def __call__(self, x, A, walk) -> bool:
         norms = np.array([np.linalg.norm(a, 2) for a in A])
@@ -168,6 +168,7 @@ class _RemeshTrigger:
             self.limit = 10.0 * float(np.max(norms))  # no better mesh: check again later
             return False
         self.mesh, self.ds, self.stages_left = mesh, walk.ds, len(walk.stages)
+        self.limit_hit = float(np.max(norms))
         return True
 
 
@@ -209,10 +210,11 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
     ``settings``: the stages (tol, rtol, atol, ds_min), the first in force at x0. With
     ``remesh_``, a piece stops where :class:`_RemeshTrigger` finds a better mesh; the next
     starts from its last point re-sampled on that mesh, in the stage and with the step
-    size reached, its tangent oriented along the last chord. Status "remesh-failed"
-    where that point cannot be corrected on the new mesh."""
+    size reached, its tangent oriented along the last chord. Where that point cannot be
+    corrected on the new mesh, the walk goes on on the old one (re-meshing again once a
+    segment amplifies 10 times more)."""
     pieces, stage, mesh, x_start, orient = [], 0, segments, x0, None
-    ds, left = kw["ds"], kw["max_points"]
+    ds, left, limit = kw["ds"], kw["max_points"], REMESH_LIMIT
     while True:
         tol, rtol, atol, ds_min = settings[stage]
         evaluate, system_at, shooting_at = ms_evaluator(system0, param, mesh, rtol, atol,
@@ -222,7 +224,7 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         for t2, r2, a2, d2 in settings[stage + 1 :]:
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
             refine.append((ev, t2, d2))
-        trigger = _RemeshTrigger(ms) if remesh_ else None
+        trigger = _RemeshTrigger(ms, limit) if remesh_ else None
         xs, mults, bifs, status = pseudo_arclength(
             evaluate, x_start, direction, bounds, ds=ds, ds_min=ds_min, ds_max=kw["ds_max"],
             max_points=left, tol=tol, jump=_jump_test(ms, system_at), refine=refine,
@@ -234,15 +236,18 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
             return pieces, status
         left -= len(xs) - 1
         stage += len(refine) - trigger.stages_left
-        ds = trigger.ds
-        mesh = trigger.mesh
+        ds, limit = trigger.ds, REMESH_LIMIT
         tol, rtol, atol, _ = settings[stage]
-        ev_new, _, shoot_new = ms_evaluator(system0, param, mesh, rtol, atol, kw["fd_step"])
+        ev_new, _, shoot_new = ms_evaluator(system0, param, trigger.mesh, rtol, atol,
+                                            kw["fd_step"])  # fmt: skip
         # the last point, in the stage reached: correct it with that stage's evaluator
         ms_cur = MultiShooting(ms.system, ms.mesh, rtol, atol, _TANGENT_ATOL)
-        x_start, orient = _resume(ms_cur, shoot_new(xs[-1][-1], None), ev_new, xs, tol)
-        if x_start is None:
-            return pieces, "remesh-failed"
+        x_new, orient = _resume(ms_cur, shoot_new(xs[-1][-1], None), ev_new, xs, tol)
+        if x_new is None:  # go on on the old mesh from the last point
+            x_new, orient, limit = xs[-1], xs[-1] - xs[-2], 10.0 * trigger.limit_hit
+        else:
+            mesh = trigger.mesh
+        x_start = x_new
 
 
 def _stick_events(xs, starts, T, system_at, ms0, evaluate, tol, bifs):

@@ -37,6 +37,13 @@ SHARP_END_STAGES: tuple[tuple[float, float, float, float], ...] = (
 )
 
 
+#: The smallest corrector tolerance ``continue_orbit(shooting="auto")`` gives multiple
+#: shooting: its residual, the segments' continuity, carries their integration error,
+#: 2e-14 to 1.1e-13 at rtol 1e-13 on Fig. 6's lower P1 fold (the tightest sharp-end
+#: stage's tol 1e-14 ended that branch "step-too-small" at multiplier 8.6e5).
+MS_TOL_FLOOR = 1e-12
+
+
 # ------------------------------------------------------------------ orbits
 def _difference(value_at, lam: float, h: float, centre):
     """d value / d lambda: central, or one-sided at the edge of the parameter's valid
@@ -202,8 +209,11 @@ remesh : bool
     :func:`~stickslip_fast.bifurcation.multishoot.remesh`), re-sampling the
     current orbit on the new mesh. Without it the mesh is fixed at the start,
     and the branch ends where its segment through the sharpest passage reaches
-    the precision limit (docs/orbits.md). Status "remesh-failed" where a
-    re-sampled point cannot be corrected on its new mesh.
+    the precision limit (docs/orbits.md). Where a re-sampled point cannot be
+    corrected on its new mesh, the branch goes on on the old one.
+    ``shooting="auto"`` gives multiple shooting a corrector tolerance of at
+    least :data:`MS_TOL_FLOOR` (its residual carries the segments'
+    integration error).
 
 Returns
 -------
@@ -321,6 +331,8 @@ def _go_on_multiple(
     if kw["sharp_ends"]:
         for stage in SHARP_END_STAGES:
             tol, rtol, atol, ds_min = (min(a, b) for a, b in zip((tol, rtol, atol, ds_min), stage))
+    # not below the segments' integration noise (docs/orbits.md, "Multiple shooting")
+    tol = max(tol, MS_TOL_FLOOR)
     param = branch.param
     lam = float(branch.values[-1])
     system = dataclasses.replace(orbit.system, **{param: lam})
