@@ -11,9 +11,12 @@ as JSON) where each branch ends:
 * ``lower``: the P1 branch from eta = 2.0 downwards through its lower fold at
   1.8430158079 and along the unstable side;
 * ``p4``: the period-4 branch born at the subcritical period-doubling of the P2 at
-  5.042952433 (``switch_branch``), continued upwards.
+  5.042952433 (``switch_branch``), continued upwards (``p4-multiple``: by multiple
+  shooting from its start, which is not ended by a crossing of the section that
+  appears or vanishes).
 
-    PYTHONPATH=. python3 scripts/ms_far_sides.py [upper] [lower] [p4] [--fixed-mesh]
+    PYTHONPATH=. python3 scripts/ms_far_sides.py [upper] [lower] [p4] [p4-multiple]
+        [--fixed-mesh]
         [--max-points N] [--out FILE]
 
 ``--fixed-mesh``: without re-meshing (the mesh refined once, at the start of the
@@ -38,6 +41,7 @@ import stickslip_fast as ssf  # noqa: E402
 # The unstable P1 orbit past the upper fold (multiplier 1.1e8; tests/test_multishoot.py)
 ETA_UNSTABLE = 3.323525498113908
 Z_UNSTABLE = [0.07259589657661687, 0.0, 0.1221705830435874, -0.006666575275298541]
+T_UNSTABLE = 14.043700862197168
 
 # A point of the P2 orbit near its lower end (as in tests/test_continuation.py)
 P2_ETA = 5.043198103554579
@@ -79,8 +83,9 @@ def upper(remesh: bool, max_points: int) -> dict:
     # (mu = 1.1e8, tests/test_multishoot.py), at its tolerances (tol 1e-12: the segments'
     # integration noise at rtol 1e-13 is ~1e-13)
     s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
-    o = ssf.find_orbit(s, np.array(Z_UNSTABLE), shooting="multiple", tol=1e-12, rtol=1e-13,
+    o = ssf.find_orbit(s, np.array(Z_UNSTABLE), shooting="multiple", tol=1e-11, rtol=1e-13,
                        atol=1e-15)  # fmt: skip
+    assert o.converged and abs(o.T - T_UNSTABLE) < 1e-8, o  # not the stable orbit (14.0427)
     t0 = time.perf_counter()
     br = ssf.continue_orbit(o, "eta", (3.3, 3.33), ds=1e-6, ds_min=1e-14, ds_max=1e-3,
                             max_points=max_points, direction=-1, tol=1e-12, rtol=1e-13,
@@ -98,7 +103,7 @@ def lower(remesh: bool, max_points: int) -> dict:
     return summary("lower P1 fold", br, time.perf_counter() - t0)
 
 
-def p4(remesh: bool, max_points: int) -> dict:
+def p4(remesh: bool, max_points: int, shooting: str = "auto") -> dict:
     s = ssf.System.preset("asymmetric", eta=P2_ETA)
     o2 = ssf.find_orbit(s, np.array(P2_POINT), period=2)
     br2 = ssf.continue_orbit(o2, "eta", (5.0428, 5.0433), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
@@ -107,14 +112,20 @@ def p4(remesh: bool, max_points: int) -> dict:
     o4 = ssf.switch_branch(br2, pd)
     t0 = time.perf_counter()
     br = ssf.continue_orbit(o4, "eta", (5.0428, 5.0440), ds=2e-5, ds_min=1e-9, ds_max=4e-5,
-                            max_points=max_points, direction=1, shooting="auto",
+                            max_points=max_points, direction=1, shooting=shooting,
                             remesh=remesh)  # fmt: skip
-    return summary("P4 branch", br, time.perf_counter() - t0)
+    return summary(f"P4 branch ({shooting} shooting)", br, time.perf_counter() - t0)
+
+
+def p4_multiple(remesh: bool, max_points: int) -> dict:
+    """The P4 branch by multiple shooting throughout: its unknowns are the orbit in time,
+    so a crossing of the section that appears or vanishes does not end it."""
+    return p4(remesh, max_points, "multiple")
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    cases = {"upper": upper, "lower": lower, "p4": p4}
+    cases = {"upper": upper, "lower": lower, "p4": p4, "p4-multiple": p4_multiple}
     p.add_argument("cases", nargs="*", default=list(cases), choices=list(cases))
     p.add_argument("--fixed-mesh", action="store_true", help="no re-meshing along the branch")
     p.add_argument("--max-points", type=int, default=400)
