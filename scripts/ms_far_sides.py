@@ -83,7 +83,8 @@ def upper(remesh: bool, max_points: int) -> dict:
     # (mu = 1.1e8, tests/test_multishoot.py), at its tolerances (tol 1e-12: the segments'
     # integration noise at rtol 1e-13 is ~1e-13)
     s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
-    o = ssf.find_orbit(s, np.array(Z_UNSTABLE), shooting="multiple", tol=1e-11, rtol=1e-13,
+    start = np.array(Z_UNSTABLE) + np.array([1e-9, 0.0, -1e-9, 1e-9])  # as in the test
+    o = ssf.find_orbit(s, start, 1, shooting="multiple", tol=1e-11, rtol=1e-13,
                        atol=1e-15)  # fmt: skip
     assert o.converged and abs(o.T - T_UNSTABLE) < 1e-8, o  # not the stable orbit (14.0427)
     t0 = time.perf_counter()
