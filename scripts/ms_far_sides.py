@@ -6,8 +6,8 @@ remesh=True)`` goes on from there by multiple shooting, cutting the segments aga
 orbit changes. This script runs the three cases of docs/orbits.md and prints (and saves
 as JSON) where each branch ends:
 
-* ``upper``: the unstable side of the P1's upper fold (3.3236646195) from its point at
-  multiplier 1.1e8 (multiple shooting only: single shooting stops at 2.6e3);
+* ``upper``: the P1 branch from eta = 3.3235255 upwards through its upper fold at
+  3.3236646195 and along the unstable side;
 * ``lower``: the P1 branch from eta = 2.0 downwards through its lower fold at
   1.8430158079 and along the unstable side;
 * ``p4``: the period-4 branch born at the subcritical period-doubling of the P2 at
@@ -41,7 +41,6 @@ import stickslip_fast as ssf  # noqa: E402
 # The unstable P1 orbit past the upper fold (multiplier 1.1e8; tests/test_multishoot.py)
 ETA_UNSTABLE = 3.323525498113908
 Z_UNSTABLE = [0.07259589657661687, 0.0, 0.1221705830435874, -0.006666575275298541]
-T_UNSTABLE = 14.043700862197168
 
 # A point of the P2 orbit near its lower end (as in tests/test_continuation.py)
 P2_ETA = 5.043198103554579
@@ -79,19 +78,14 @@ def summary(name: str, br, seconds: float) -> dict:
 
 
 def upper(remesh: bool, max_points: int) -> dict:
-    # single shooting ends at mu = 2.6e3 (docs/limits.md); start where the fixed mesh went
-    # (mu = 1.1e8, tests/test_multishoot.py), at its tolerances (tol 1e-11: the segments'
-    # integration noise at rtol 1e-13 is ~1e-13)
+    # the stable P1 at eta = 3.3235255 (find_orbit without a period, from the unstable
+    # orbit's point, converges onto it: T = 14.0427), continued up through the fold
     s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
-    start = np.array(Z_UNSTABLE) + np.array([1e-9, 0.0, -1e-9, 1e-9])  # as in the test
-    o = ssf.find_orbit(s, start, 1, shooting="multiple", tol=1e-11, rtol=1e-13,
-                       atol=1e-15)  # fmt: skip
-    assert o.converged and abs(o.T - T_UNSTABLE) < 1e-8, o  # not the stable orbit (14.0427)
+    o = ssf.find_orbit(s, np.array(Z_UNSTABLE))
+    assert o.converged and o.stable, o
     t0 = time.perf_counter()
-    br = ssf.continue_orbit(o, "eta", (3.3, 3.33), ds=1e-6, ds_min=1e-14, ds_max=1e-3,
-                            max_points=max_points, direction=-1, tol=1e-11, rtol=1e-13,
-                            atol=1e-15, sharp_ends=False, shooting="multiple",
-                            remesh=remesh)  # fmt: skip
+    br = ssf.continue_orbit(o, "eta", (3.3, 3.33), ds=1e-5, ds_max=1e-4, max_points=max_points,
+                            direction=1, shooting="auto", remesh=remesh)  # fmt: skip
     return summary("upper P1 fold", br, time.perf_counter() - t0)
 
 
