@@ -78,6 +78,31 @@ def test_tighter_stages_pass_a_fold_the_first_evaluator_cannot_resolve():
     np.testing.assert_allclose(xs[:, 0] ** 2, xs[:, 2], atol=1e-10)
 
 
+def test_a_stopped_walk_resumes_in_new_coordinates_through_the_fold():
+    """``stop`` and ``orient`` (re-meshed multiple shooting): a walk stopped past the fold
+    resumes in rescaled coordinates (w = 2 z1) along the branch, not back to the fold."""
+
+    def scaled(x):  # the same map in w = 2 z1: G(w, z2, lam) = G(w / 2, z2, lam)
+        ok, G, DG, A = fold_pd_map(np.array([0.5 * x[0], x[1], x[2]]))
+        return ok, G, DG @ np.diag([0.5, 1.0, 1.0]), A
+
+    def stop(x, A, walk):  # the first point past the fold with z1 < -0.3
+        return x[0] < -0.3
+
+    start = np.array([0.5, 0.0, 0.25])
+    xs, _, bifs, status = pseudo_arclength(fold_pd_map, start, -1.0, (-1.0, 1.5), stop=stop, **KW)
+    assert status == "stopped" and [b[0] for b in bifs] == ["fold"] and xs[-1, 0] < -0.3
+    new = xs[-2:] * np.array([2.0, 1.0, 1.0])
+    chord = new[1] - new[0]  # lambda grows there: direction=-1 alone would turn back
+    assert chord[-1] > 0
+    back, _, _, st_back = pseudo_arclength(scaled, new[1], -1.0, (-1.0, 1.5), **KW)
+    assert back[1, 2] < new[1, 2]
+    ys, mults, bifs2, st = pseudo_arclength(scaled, new[1], -1.0, (-1.0, 1.5), orient=chord, **KW)
+    assert st == "bounds" and not bifs2 and abs(ys[-1, 2] - 1.5) < 1e-12
+    np.testing.assert_allclose((0.5 * ys[:, 0]) ** 2, ys[:, 2], atol=1e-10)
+    assert np.all(np.diff(ys[:, 2]) > 0) and np.all(np.abs(mults[:, 0]) > 1)
+
+
 def test_period_doubling_is_located():
     xs, mults, bifs, status = pseudo_arclength(
         fold_pd_map, np.array([0.5, 0.0, 0.25]), 1.0, (-1.0, 1.5), **KW

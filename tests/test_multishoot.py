@@ -114,3 +114,37 @@ def test_multiple_shooting_branch_points_are_fixed_points_of_the_return_map():
         st, pts, times, jac = return_map(s.replace(eta=float(eta)), z, 1)
         assert st == "ok" and np.max(np.abs(pts[-1] - z)) < 1e-9 and abs(times[-1] - T) < 1e-9
         assert abs(mu[0] - np.linalg.eigvals(jac)[np.argmax(np.abs(np.linalg.eigvals(jac)))]) < 1e-6
+
+
+def test_a_remeshed_branch_keeps_to_the_orbits_of_the_fixed_mesh(monkeypatch):
+    # a re-mesh forced at every point (limit 0.5: the stable orbit's segments amplify by
+    # ~1): the walk goes on in pieces, each point re-sampled on the next mesh, corrected
+    # and followed on; its points are the fixed-mesh branch's up to the first re-mesh
+    # (the same calls) and fixed points of the return map (1e-9) after it
+    from stickslip_fast.bifurcation import multishoot_branch
+    from stickslip_fast.bifurcation.returnmap import return_map
+
+    meshes = []
+    remesh = multishoot_branch.remesh
+
+    def counted(*args, **kw):
+        mesh = remesh(*args, **kw)
+        meshes.append(mesh.size - 1)
+        return mesh
+
+    monkeypatch.setattr(multishoot_branch, "REMESH_LIMIT", 0.5)
+    monkeypatch.setattr(multishoot_branch, "remesh", counted)
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    kw = dict(ds=0.01, ds_max=0.02, max_points=4, shooting="multiple", stick_events=False)
+    fixed = ssf.continue_orbit(orbit, "eta", (1.9, 2.1), **kw)
+    branch = ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True, **kw)
+    assert meshes and branch.values.size == 4 and branch.values[-1] > 2.0, (meshes, branch)
+    assert branch.values[1] == fixed.values[1] and np.array_equal(branch.points[1], fixed.points[1])
+    assert not np.array_equal(branch.values[2:], fixed.values[2:])  # a piece on a new mesh
+    for eta, z, T, mu in zip(branch.values, branch.points, branch.T, branch.multipliers):
+        st, pts, times, jac = return_map(s.replace(eta=float(eta)), z, 1)
+        assert st == "ok" and np.max(np.abs(pts[-1] - z)) < 1e-9 and abs(times[-1] - T) < 1e-9
+        assert abs(mu[0] - np.linalg.eigvals(jac)[np.argmax(np.abs(np.linalg.eigvals(jac)))]) < 1e-6
+    with pytest.raises(ValueError, match="remesh"):
+        ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True)

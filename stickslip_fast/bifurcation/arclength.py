@@ -145,6 +145,17 @@ tests : callable
     period-doubling / Neimark-Sacker; equilibria use fold / Hopf).
 spectrum : callable, optional
     A -> the eigenvalues recorded per point (default: by modulus, largest first).
+orient : ndarray, optional
+    Orients the first tangent instead of ``direction`` (its sign along
+    ``orient``): a branch resumed in new coordinates (a re-meshed multiple
+    shooting) keeps its sense through a fold.
+stall_ds_min : float, optional
+    The ``ds_min`` of the stall test (default ``ds_min``; a resumed branch
+    passes the one given first).
+stop : callable, optional
+    (x, A, walk) -> True ends the branch after accepting x (its map's Jacobian
+    A) with status "stopped" (for a change of coordinates; ``walk`` holds the
+    step size and the settings in force).
 refine : sequence of (evaluate, tol, ds_min)
     Tighter settings to go on with, in turn, where the corrector fails at
     ``ds_min`` (not where the steps jump off the branch): the last point is
@@ -162,7 +173,7 @@ xs, mults, bifs, status
     The points (k, m + 1), their multipliers (k, m), the located
     bifurcations (kind, lambda, index, x) and the reason the branch ended:
     "bounds", "max-points", "step-too-small" (the corrector failed),
-    "nonsmooth" (steps kept jumping off the branch) or "precision-limit"
+    "nonsmooth" (steps kept jumping off the branch), "stopped" (``stop``) or "precision-limit"
     (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
     less than ``ds_min``; or the last corrector stopped at the residual's
     round-off floor, :func:`_correct`, with no stage left).
@@ -186,9 +197,13 @@ def pseudo_arclength(
     tests: Callable[[np.ndarray, np.ndarray], dict[str, float]] = _tests,
     spectrum: Callable[[np.ndarray], np.ndarray] | None = None,
     refine: Sequence[tuple[Evaluator, float, float]] = (),
+    orient: np.ndarray | None = None,
+    stall_ds_min: float | None = None,
+    stop: Callable[[np.ndarray, Any, Any], bool] | None = None,
 ):
     walk = _Walk.start(evaluate, x0, direction, tol, ds, ds_min, refine, tests,
-                       spectrum or _sorted_eigs)  # fmt: skip
+                       spectrum or _sorted_eigs, orient)  # fmt: skip
+    stall_ds = ds_min if stall_ds_min is None else stall_ds_min
     lo, hi = bounds
     status = "max-points"
     while len(walk.xs) < max_points:
@@ -207,11 +222,14 @@ def pseudo_arclength(
         if trial.on_bound:
             status = "bounds"
             break
-        if _stalled(walk.xs, ds_min):  # the ds_min given: the stages lower walk.ds_min
+        if _stalled(walk.xs, stall_ds):  # the ds_min given: the stages lower walk.ds_min
             status = "precision-limit"
             break
         if trial.its <= 3:
             walk.ds = min(walk.ds * 1.5, ds_max)
+        if stop is not None and stop(trial.x_new, trial.data[2], walk):
+            status = "stopped"
+            break
     return np.array(walk.xs), np.array(walk.mults), walk.bifs, status
 
 
@@ -310,13 +328,16 @@ class _Walk:
     bifs: list[tuple[str, float, int, np.ndarray]] = field(default_factory=list)
 
     @classmethod
-    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, test_fn, spectrum) -> _Walk:
-        """The walk at x0, its tangent oriented by ``direction`` in lambda."""
+    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, test_fn, spectrum,
+              orient=None) -> _Walk:  # fmt: skip
+        """The walk at x0, its tangent oriented by ``direction`` in lambda (or by ``orient``)."""
         ok, G, DG, A = evaluate(x0)
         if not ok:
             raise ValueError("the start could not be evaluated")
         guess = np.zeros(G.size + 1)
         guess[-1] = 1.0 if direction >= 0 else -1.0
+        if orient is not None:
+            guess = np.asarray(orient, dtype=float)
         t = _tangent(DG, guess)
         walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()])
         walk.mults.append(spectrum(A))

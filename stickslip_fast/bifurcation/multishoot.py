@@ -36,7 +36,9 @@ from ..core.variational import propagate_sensitivity, propagate_tangents
 from ..model.system import System
 from .returnmap import _MAX_STEPS, SECTION_INDEX, _field, _sensitivity_params
 
-__all__ = ["periodic_multipliers", "MultiShooting", "refine_mesh", "DEFAULT_SEGMENTS"]
+__all__ = [
+    "periodic_multipliers", "MultiShooting", "refine_mesh", "remesh", "DEFAULT_SEGMENTS",
+]  # fmt: skip
 
 #: Segments per period when none are asked for.
 DEFAULT_SEGMENTS = 8
@@ -46,6 +48,13 @@ DEFAULT_SEGMENTS = 8
 #: sharp fold nearly all of an orbit's amplification happens in the short passage near
 #: the capture into a stick phase, which even cuts leave in one segment.
 MESH_LIMIT = 10.0
+
+#: A continuation with ``remesh=True`` cuts the segments again (:func:`remesh`) where one
+#: amplifies by more than this (the norm of its factor of the section Jacobian).
+REMESH_LIMIT = 10.0 * MESH_LIMIT
+
+#: The most segments a mesh gets (:func:`refine_mesh`, :func:`remesh`).
+MAX_SEGMENTS = 64
 
 
 def periodic_multipliers(
@@ -287,7 +296,11 @@ class MultiShooting:
 
 
 def refine_mesh(
-    ms: MultiShooting, Y: np.ndarray, T: float, limit: float = 4.0, max_segments: int = 64
+    ms: MultiShooting,
+    Y: np.ndarray,
+    T: float,
+    limit: float = 4.0,
+    max_segments: int = MAX_SEGMENTS,
 ) -> np.ndarray:
     """A mesh in which no segment amplifies by more than ``limit`` (2-norm of Phi), by
     bisecting the segments of ``ms`` (starts Y over T) that do, up to ``max_segments``."""
@@ -307,3 +320,28 @@ def refine_mesh(
         mesh.insert(i + 1, 0.5 * (mesh[i] + mesh[i + 1]))
         starts.insert(i + 1, y_mid)
     return np.array(mesh)
+
+
+def remesh(
+    ms: MultiShooting,
+    Y: np.ndarray,
+    T: float,
+    norms: np.ndarray,
+    limit: float = MESH_LIMIT,
+    max_segments: int = MAX_SEGMENTS,
+) -> np.ndarray:
+    """A new mesh for the orbit cut as ``ms.mesh`` (starts Y over T), whose segments
+    amplify by ``norms``: runs of neighbours whose norms multiply to at most ``limit`` are
+    merged (their inner cuts dropped), then :func:`refine_mesh` bisects those above it.
+
+    Merging first frees segments where the orbit stopped amplifying for the passage
+    where it now does (past a sharp fold: the capture into a stick phase).
+    """
+    keep, acc = [0], 1.0
+    for i in range(1, ms.m):
+        acc *= max(float(norms[i - 1]), 1.0)
+        if acc * max(float(norms[i]), 1.0) > limit:
+            keep.append(i)
+            acc = 1.0
+    merged = MultiShooting(ms.system, np.r_[ms.mesh[keep], 1.0], *ms.kw)
+    return refine_mesh(merged, Y[keep], T, limit, max_segments)

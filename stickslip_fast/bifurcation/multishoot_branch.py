@@ -12,10 +12,10 @@ import math
 
 import numpy as np
 
-from .arclength import _locate_change, pseudo_arclength
+from .arclength import NOISE_FLOOR, _correct, _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
 from .equilibria import EQUILIBRIUM_SPEED
-from .multishoot import MultiShooting, periodic_multipliers, refine_mesh
+from .multishoot import REMESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh, remesh
 from .multishoot_orbit import initial_segments, newton_multiple
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
@@ -88,11 +88,92 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
 
 def continue_multiple(system0, param, period, x0, direction, bounds, *, segments, ds, ds_min,
                       ds_max, max_points, tol, rtol, atol, fd_step, stick_events,
-                      sharp_ends, stages) -> Branch:  # fmt: skip
+                      sharp_ends, stages, remesh=False) -> Branch:  # fmt: skip
     """The branch through x0 = (u, lambda) by multiple shooting (``continue_orbit``'s arguments;
-    ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min))."""
-    evaluate, system_at, shooting_at = ms_evaluator(system0, param, segments, rtol, atol, fd_step)
-    ms0 = shooting_at(x0[-1], None)
+    ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
+    segments are cut again (:func:`.multishoot.remesh`) wherever one amplifies by more
+    than :data:`.multishoot.REMESH_LIMIT`; the branch is then followed in pieces, one per
+    mesh (:func:`walk_pieces`)."""
+    settings = [(tol, rtol, atol, ds_min)]
+    if sharp_ends:
+        for stage in stages:
+            nxt = tuple(min(a, b) for a, b in zip(settings[-1], stage))
+            if nxt != settings[-1]:
+                settings.append(nxt)
+    kw = dict(ds=ds, ds_max=ds_max, max_points=max_points, fd_step=fd_step)
+    pieces, status = walk_pieces(system0, param, x0, direction, bounds, segments, settings,
+                                 remesh, kw)  # fmt: skip
+    _, system_at, _ = ms_evaluator(system0, param, segments, rtol, atol, fd_step)
+    if status == "nonsmooth":
+        last = pieces[-1]
+        last.bifs.append(("section-grazing", float(last.xs[-1][-1]), len(last.xs) - 1,
+                          last.xs[-1].copy()))  # fmt: skip
+    vals, pts, Ts, mults, counts, times, bifs = [], [], [], [], [], [], []
+    for k, pc in enumerate(pieces):
+        skip = 1 if k else 0  # a piece starts at its predecessor's last point, re-meshed
+        off = len(vals) - skip
+        starts = [pc.ms.unpack(x[:-1])[0] for x in pc.xs]
+        T = pc.xs[:, -2].copy()
+        if stick_events:
+            c, t = _stick_events(pc.xs, starts, T, system_at, pc.ms, pc.evaluate, pc.tol,
+                                 pc.bifs)  # fmt: skip
+            counts.extend(c[skip:])
+            times.extend(t[skip:])
+        vals.extend(pc.xs[skip:, -1])
+        pts.extend(Y[0] for Y in starts[skip:])
+        Ts.extend(T[skip:])
+        mults.extend(pc.mults[skip:])
+        bifs.extend((b, v, i + off, pc.ms.unpack(x[:-1])[0][0]) for b, v, i, x in pc.bifs)
+    bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
+    mults = np.array(mults)
+    return Branch(
+        system=system0, param=param, period=period, values=np.array(vals),
+        points=np.array(pts), T=np.array(Ts), multipliers=mults,
+        stable=np.all(np.abs(mults) < 1.0, axis=1),
+        bifurcations=[Bifurcation(*b) for b in bifs], status=status,
+        stick_count=np.array(counts, dtype=np.int64) if stick_events else None,
+        stick_time=np.array(times) if stick_events else None,
+    )  # fmt: skip
+
+
+@dataclasses.dataclass
+class _Piece:
+    """A stretch of a branch followed on one mesh: its shooting system, its first stage's
+    evaluator and tolerance, and :func:`pseudo_arclength`'s results."""
+
+    ms: MultiShooting
+    evaluate: object
+    tol: float
+    xs: np.ndarray
+    mults: np.ndarray
+    bifs: list
+
+
+class _RemeshTrigger:
+    """``pseudo_arclength``'s ``stop``: True where a segment of ``ms`` amplifies by more
+    than the limit and :func:`remesh` gives another mesh (kept in ``mesh``, with the
+    walk's step size and the number of its stages left)."""
+
+    def __init__(self, ms: MultiShooting, limit: float = REMESH_LIMIT) -> None:
+        self.ms, self.limit = ms, limit
+        self.mesh, self.ds, self.stages_left, self.limit_hit = None, math.nan, 0, math.nan
+
+    def __call__(self, x, A, walk) -> bool:
+        norms = np.array([np.linalg.norm(a, 2) for a in A])
+        if not float(np.max(norms)) > self.limit:
+            return False
+        Y, T = self.ms.unpack(x[:-1])
+        mesh = remesh(self.ms, Y, T, norms)
+        if mesh.size == self.ms.mesh.size and np.allclose(mesh, self.ms.mesh, rtol=0, atol=1e-12):
+            self.limit = 10.0 * float(np.max(norms))  # no better mesh: check again later
+            return False
+        self.mesh, self.ds, self.stages_left = mesh, walk.ds, len(walk.stages)
+        self.limit_hit = float(np.max(norms))
+        return True
+
+
+def _jump_test(ms0: MultiShooting, system_at):
+    """The ``jump`` of :func:`pseudo_arclength`: T moved by more than 5 %, or a rest point."""
 
     def jump(x_old, x_new):
         t_old, t_new = float(x_old[-2]), float(x_new[-2])
@@ -101,35 +182,72 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
         Y, _ = ms0.unpack(x_new[:-1])
         return bool(np.max(np.abs(_field(system_at(x_new[-1]), Y[0]))) < EQUILIBRIUM_SPEED)
 
-    refine = []
-    if sharp_ends:
-        cur = (tol, rtol, atol, ds_min)
-        for stage in stages:
-            nxt = tuple(min(a, b) for a, b in zip(cur, stage))
-            if nxt != cur:
-                ev, _, _ = ms_evaluator(system0, param, segments, nxt[1], nxt[2], fd_step)
-                refine.append((ev, nxt[0], nxt[3]))
-                cur = nxt
-    xs, mults, bifs, status = pseudo_arclength(
-        evaluate, x0, direction, bounds, ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, jump=jump, refine=refine,
-        tests=multiplier_tests, spectrum=periodic_multipliers,
-    )  # fmt: skip
-    if status == "nonsmooth":
-        bifs.append(("section-grazing", float(xs[-1][-1]), len(xs) - 1, xs[-1].copy()))
-    starts = [ms0.unpack(x[:-1])[0] for x in xs]
-    T = xs[:, -2].copy()
-    stick_count = stick_time = None
-    if stick_events:
-        stick_count, stick_time = _stick_events(xs, starts, T, system_at, ms0, evaluate, tol, bifs)
-    bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
-    return Branch(
-        system=system0, param=param, period=period, values=xs[:, -1].copy(),
-        points=np.array([Y[0] for Y in starts]), T=T, multipliers=mults,
-        stable=np.all(np.abs(mults) < 1.0, axis=1),
-        bifurcations=[Bifurcation(k, v, i, ms0.unpack(x[:-1])[0][0]) for k, v, i, x in bifs],
-        status=status, stick_count=stick_count, stick_time=stick_time,
-    )  # fmt: skip
+    return jump
+
+
+def _resume(ms_old: MultiShooting, ms_new: MultiShooting, evaluate, xs, tol):
+    """(x, orient): the last point of ``xs`` re-sampled on ``ms_new``'s mesh and corrected
+    there (on the hyperplane through it normal to the re-sampled last chord, which also
+    orients the next tangent), or (None, None)."""
+    out = []
+    for x in (xs[-2], xs[-1]):
+        Y, T = ms_old.unpack(x[:-1])
+        st, Yn = ms_old.states_at(Y, T, ms_new.mesh[:-1] * T, mesh=ms_old.mesh)
+        if st != "ok":
+            return None, None
+        out.append(np.r_[ms_new.pack(Yn, T), x[-1]])
+    chord = out[1] - out[0]
+    normal = chord / np.linalg.norm(chord)
+    okc, x, data, _ = _correct(evaluate, out[1], normal, out[1], tol, 8)
+    if not okc or data is NOISE_FLOOR:
+        return None, None
+    return x, chord
+
+
+def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remesh_, kw):
+    """The branch by :func:`pseudo_arclength`, one piece per mesh: (pieces, status).
+
+    ``settings``: the stages (tol, rtol, atol, ds_min), the first in force at x0. With
+    ``remesh_``, a piece stops where :class:`_RemeshTrigger` finds a better mesh; the next
+    starts from its last point re-sampled on that mesh, in the stage and with the step
+    size reached, its tangent oriented along the last chord. Where that point cannot be
+    corrected on the new mesh, the walk goes on on the old one (re-meshing again once a
+    segment amplifies 10 times more)."""
+    pieces, stage, mesh, x_start, orient = [], 0, segments, x0, None
+    ds, left, limit = kw["ds"], kw["max_points"], REMESH_LIMIT
+    while True:
+        tol, rtol, atol, ds_min = settings[stage]
+        evaluate, system_at, shooting_at = ms_evaluator(system0, param, mesh, rtol, atol,
+                                                        kw["fd_step"])  # fmt: skip
+        ms = shooting_at(x_start[-1], None)
+        refine = []
+        for t2, r2, a2, d2 in settings[stage + 1 :]:
+            ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
+            refine.append((ev, t2, d2))
+        trigger = _RemeshTrigger(ms, limit) if remesh_ else None
+        xs, mults, bifs, status = pseudo_arclength(
+            evaluate, x_start, direction, bounds, ds=ds, ds_min=ds_min, ds_max=kw["ds_max"],
+            max_points=left, tol=tol, jump=_jump_test(ms, system_at), refine=refine,
+            tests=multiplier_tests, spectrum=periodic_multipliers, orient=orient,
+            stall_ds_min=settings[0][3], stop=trigger,
+        )  # fmt: skip
+        pieces.append(_Piece(ms, evaluate, tol, xs, np.asarray(mults), bifs))
+        if status != "stopped":
+            return pieces, status
+        left -= len(xs) - 1
+        stage += len(refine) - trigger.stages_left
+        ds, limit = trigger.ds, REMESH_LIMIT
+        tol, rtol, atol, _ = settings[stage]
+        ev_new, _, shoot_new = ms_evaluator(system0, param, trigger.mesh, rtol, atol,
+                                            kw["fd_step"])  # fmt: skip
+        # the last point, in the stage reached: correct it with that stage's evaluator
+        ms_cur = MultiShooting(ms.system, ms.mesh, rtol, atol, _TANGENT_ATOL)
+        x_new, orient = _resume(ms_cur, shoot_new(xs[-1][-1], None), ev_new, xs, tol)
+        if x_new is None:  # go on on the old mesh from the last point
+            x_new, orient, limit = xs[-1], xs[-1] - xs[-2], 10.0 * trigger.limit_hit
+        else:
+            mesh = trigger.mesh
+        x_start = x_new
 
 
 def _stick_events(xs, starts, T, system_at, ms0, evaluate, tol, bifs):

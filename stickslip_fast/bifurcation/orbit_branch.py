@@ -37,6 +37,13 @@ SHARP_END_STAGES: tuple[tuple[float, float, float, float], ...] = (
 )
 
 
+#: The smallest corrector tolerance ``continue_orbit(shooting="auto")`` gives multiple
+#: shooting: its residual, the segments' continuity, carries their integration error,
+#: 2e-14 to 1.1e-13 at rtol 1e-13 on Fig. 6's lower P1 fold (the tightest sharp-end
+#: stage's tol 1e-14 ended that branch "step-too-small" at multiplier 8.6e5).
+MS_TOL_FLOOR = 1e-12
+
+
 # ------------------------------------------------------------------ orbits
 def _difference(value_at, lam: float, h: float, centre):
     """d value / d lambda: central, or one-sided at the edge of the parameter's valid
@@ -195,6 +202,18 @@ shooting : {"single", "multiple", "auto"}
     tolerances), appended to the branch (``status`` names both ends).
 segments : int
     m >= 1, the segments of multiple shooting.
+remesh : bool
+    Multiple shooting only: cut the segments again along the branch wherever
+    one amplifies by more than ``multishoot.REMESH_LIMIT`` (merge neighbours that
+    amplify little, bisect those above ``MESH_LIMIT``, up to 64 segments;
+    :func:`~stickslip_fast.bifurcation.multishoot.remesh`), re-sampling the
+    current orbit on the new mesh. Without it the mesh is fixed at the start,
+    and the branch ends where its segment through the sharpest passage reaches
+    the precision limit (docs/orbits.md). Where a re-sampled point cannot be
+    corrected on its new mesh, the branch goes on on the old one.
+    ``shooting="auto"`` gives multiple shooting a corrector tolerance of at
+    least :data:`MS_TOL_FLOOR` (its residual carries the segments'
+    integration error).
 
 Returns
 -------
@@ -230,19 +249,23 @@ def continue_orbit(
     sharp_ends: bool = True,
     shooting: str = "single",
     segments: int = DEFAULT_SEGMENTS,
+    remesh: bool = False,
 ) -> Branch:
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
     lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
                                max_points)  # fmt: skip
     check_shooting(shooting, segments)
+    if remesh and shooting == "single":
+        raise ValueError("remesh needs shooting='multiple' or 'auto', got shooting='single'")
     kw = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol, rtol=rtol,
               atol=atol, fd_step=fd_step, stick_events=stick_events, sharp_ends=sharp_ends)  # fmt: skip
     if shooting == "multiple":
-        return _continue_multiple_from(orbit, param, (lo, hi), direction, int(segments), kw)
+        return _continue_multiple_from(orbit, param, (lo, hi), direction, int(segments), kw,
+                                       bool(remesh))  # fmt: skip
     branch = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
     if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
-        branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw)
+        branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw, bool(remesh))
     return branch
 
 
@@ -250,7 +273,13 @@ continue_orbit.__doc__ = _CONTINUE_ORBIT_DOC
 
 
 def _continue_multiple_from(
-    orbit: Orbit, param: str, bounds: tuple[float, float], direction: float, segments: int, kw
+    orbit: Orbit,
+    param: str,
+    bounds: tuple[float, float],
+    direction: float,
+    segments: int,
+    kw,
+    remesh: bool = False,
 ) -> Branch:
     """continue_orbit with shooting="multiple": the orbit corrected by multiple shooting
     (``segments`` even cuts, refined by :data:`MESH_LIMIT`), then continued."""
@@ -260,7 +289,8 @@ def _continue_multiple_from(
     if x0 is None:
         raise ValueError("orbit could not be corrected by multiple shooting")
     return continue_multiple(orbit.system, param, orbit.period, x0, direction, bounds,
-                             segments=mesh, stages=SHARP_END_STAGES, **kw)  # fmt: skip
+                             segments=mesh, stages=SHARP_END_STAGES, remesh=remesh,
+                             **kw)  # fmt: skip
 
 
 def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
@@ -290,7 +320,9 @@ def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
     return stick_count, stick_time
 
 
-def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> Branch:
+def _go_on_multiple(
+    branch: Branch, orbit: Orbit, bounds, segments: int, kw, remesh: bool = False
+) -> Branch:
     """``branch`` continued by multiple shooting from its last point (shooting="auto")."""
     if branch.values.size < 2 or kw["max_points"] - branch.values.size < 2:
         return branch
@@ -299,6 +331,8 @@ def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> 
     if kw["sharp_ends"]:
         for stage in SHARP_END_STAGES:
             tol, rtol, atol, ds_min = (min(a, b) for a, b in zip((tol, rtol, atol, ds_min), stage))
+    # not below the segments' integration noise (docs/orbits.md, "Multiple shooting")
+    tol = max(tol, MS_TOL_FLOOR)
     param = branch.param
     lam = float(branch.values[-1])
     system = dataclasses.replace(orbit.system, **{param: lam})
@@ -311,7 +345,7 @@ def _go_on_multiple(branch: Branch, orbit: Orbit, bounds, segments: int, kw) -> 
                ds_min=ds_min, max_points=kw["max_points"] - branch.values.size + 1)  # fmt: skip
     kw2["ds"] = min(kw2["ds"], kw["ds_max"])
     second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
-                               segments=mesh, stages=(), **kw2)  # fmt: skip
+                               segments=mesh, stages=(), remesh=remesh, **kw2)  # fmt: skip
     second.system = orbit.system
     return append_branch(branch, second, f"single shooting: {branch.status}")
 
