@@ -20,7 +20,7 @@ MAIN_JOB = (
     "python3 -m pip install . && stickslip-fast sweep data/fig06_asymmetric_constant.toml "
     "-o out/fig06.h5 && python3 scripts/plot_bifurcation.py out/fig06.h5 -o out/fig06.png --period"
 )
-TEST_JOB = 'python3 -m pip install ".[test]" && python3 -m pytest -q'
+TEST_JOB = 'python3 -m pip install ".[test]" && python3 -m pytest -q -n auto --dist loadfile'
 
 
 def _read(name):
@@ -33,6 +33,8 @@ def test_readme_is_short_and_has_the_two_commands():
     assert len(text.splitlines()) <= 150
     assert MAIN_JOB in text
     assert TEST_JOB in text
+    # CI runs the README's test command
+    assert TEST_JOB.split(" && ")[1] in _read(".ci/run")
     # pictures it shows exist
     for path in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text):
         assert os.path.exists(os.path.join(ROOT, path)), path
