@@ -50,7 +50,7 @@ class LocalSaddle:
     ----------
     point : ndarray (d,)
     mu : float
-        The unstable multiplier (real, |mu| > 1).
+        The unstable multiplier (real, ``|mu| > 1``).
     right, left : ndarray (d,)
         Its right and left eigenvectors, ``left . right = 1``, ``|right| = 1``.
     """
@@ -105,7 +105,7 @@ class StableManifold:
     target : ndarray of int (m,)
         Which of the orbit's points P^n(p) lands near.
     residual : ndarray (m,)
-        |g_n(p)|: the unstable coordinate of P^n(p) - x* (section units).
+        ``|g_n(p)|``: the unstable coordinate of P^n(p) - x* (section units).
     distance : ndarray (m,)
         ||P^n(p) - x*|| (max norm): how far along the stable directions it landed.
     branch_status : list of str
