@@ -57,6 +57,20 @@ def _bordered(M, b, c):
     return sol[:n], solT[:n], float(sol[n])
 
 
+def central_difference(base: Callable, x: np.ndarray, direction: np.ndarray, n_z: int,
+                       h: float, norm: float):  # fmt: skip
+    """DG(x + dx) - DG(x - dx) with dx = h direction / norm in the first ``n_z``
+    coordinates (times norm / (2 h): DG's derivative along ``direction``), or None
+    where ``base`` fails at either end. Shared by the fold/PD and the NS test functions."""
+    dx = np.zeros_like(x)
+    dx[:n_z] = h * direction / norm
+    ok_p, _, DGp, _ = base(x + dx)
+    ok_m, _, DGm, _ = base(x - dx)
+    if not (ok_p and ok_m):
+        return None
+    return DGp - DGm
+
+
 def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray, h: float,
               scale: float = 1.0):  # fmt: skip
     """The evaluator of F = (G, scale g) for :func:`pseudo_arclength`, from ``base``.
@@ -79,13 +93,10 @@ def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray,
         except np.linalg.LinAlgError:
             return False, None, None, None
         nv = float(np.linalg.norm(v))
-        dx = np.zeros_like(x)
-        dx[:n_z] = h * v / nv
-        ok_p, _, DGp, _ = base(x + dx)
-        ok_m, _, DGm, _ = base(x - dx)
-        if not (ok_p and ok_m):
+        diff = central_difference(base, x, v, n_z, h, nv)
+        if diff is None:
             return False, None, None, None
-        grad = -(w @ (DGp - DGm)) * (nv / (2 * h))
+        grad = -(w @ diff) * (nv / (2 * h))
         return True, np.r_[G, scale * g], np.vstack([DG, scale * grad]), A
 
     return evaluate

@@ -39,7 +39,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .detection import _sorted_eigs
-from .foldcurve import _product, curve_tests, run_curve
+from .foldcurve import _product, central_difference, curve_tests, run_curve
 
 #: The kind name of an NS curve (as :class:`~.branch.Bifurcation`'s).
 NS_KIND = "neimark-sacker"
@@ -94,13 +94,10 @@ def ns_augmented(base: Callable, n_z: int, b: np.ndarray, c: np.ndarray, h: floa
         nv = float(np.linalg.norm(v))
         cols = []
         for part in (v.real, v.imag):
-            dy = np.zeros_like(y)
-            dy[:n_z] = h * part / nv
-            ok_p, _, DGp, _ = base(y + dy)
-            ok_m, _, DGm, _ = base(y - dy)
-            if not (ok_p and ok_m):
+            diff = central_difference(base, y, part, n_z, h, nv)
+            if diff is None:
                 return False, None, None, None
-            cols.append((DGp - DGm) * (nv / (2 * h)))
+            cols.append(diff * (nv / (2 * h)))
         grad_y = -(w.conj() @ (cols[0] + 1j * cols[1]))
         grad = np.r_[grad_y[:n_z], 1j * e * np.vdot(w, v), grad_y[n_z:]]
         DF = np.vstack([np.insert(DG, n_z, 0.0, axis=1), scale * grad.real, scale * grad.imag])
