@@ -36,7 +36,7 @@ from ..model.system import System
 from .detection import _sorted_eigs
 from .foldcurve import run_curve
 from .returnmap import _field
-from .stickphases import STICK_SPEED
+from .stickphases import STICK_SPEED, slip_velocity
 
 #: The kind name of a stick-phase event curve (as :class:`~.branch.Bifurcation`'s).
 STICK_KIND = "stick-phase"
@@ -64,8 +64,8 @@ class StickEvent:
 def _slip(system: System, y: np.ndarray, disk: int) -> tuple[float, float]:
     """(s, q): the slip speed of ``disk`` at y and q = u . du/dt (= s ds/dt)."""
     f = _field(system, y)
-    vb, dvb = (y[-1], f[-1]) if system.is_dc_motor else (system.vb, 0.0)
-    u1, u2 = y[4 * disk + 1] - vb, y[4 * disk + 3]
+    dvb = f[-1] if system.is_dc_motor else 0.0
+    u1, u2 = slip_velocity(system, y, disk)
     return math.hypot(u1, u2), u1 * (f[4 * disk + 1] - dvb) + u2 * f[4 * disk + 3]
 
 

@@ -84,13 +84,19 @@ def stick_phases(
     return _phase_durations(system, np.concatenate(ys), T, dt, threshold)
 
 
+def slip_velocity(system: System, y: np.ndarray, disk: int) -> tuple:
+    """(u1, u2): ``disk``'s (0-based) velocity relative to its belt in the states y
+    (n_state,) or (k, n_state); a stick phase is where hypot(u1, u2) < threshold eps."""
+    vb = y[..., -1] if system.is_dc_motor else system.vb
+    return y[..., 4 * disk + 1] - vb, y[..., 4 * disk + 3]
+
+
 def _phase_durations(system: System, y: np.ndarray, T: float, dt: float, threshold: float):
     """The stick phases' durations in the samples y (one period, step dt), disk by disk."""
     n = system.n_oscillators
-    vb = y[:, -1] if system.is_dc_motor else np.full(len(y), system.vb)
     out = []
     for i in range(n):
-        speed = np.hypot(y[:, 4 * i + 1] - vb, y[:, 4 * i + 3])
+        speed = np.hypot(*slip_velocity(system, y, i))
         stick = speed < threshold * system.eps
         if stick.all():
             out.append(float(T))
