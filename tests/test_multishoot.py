@@ -4,6 +4,8 @@ where single shooting stops. About 10 s warm."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -100,6 +102,27 @@ def test_multiple_shooting_converges_where_single_shooting_stops():
     assert 0.9e8 < abs(multi.multipliers[0]) < 1.4e8 and multi.multipliers[0].real > 1
     auto = ssf.find_orbit(s, start, 1, shooting="auto", tol=1e-11, rtol=1e-13, atol=1e-15)
     assert auto.converged and abs(auto.T - multi.T) < 1e-9
+
+    # continued from there on its own segments (one trajectory from points[0] leaves the
+    # orbit within the period: from it alone the start cannot be corrected)
+    kw = dict(ds=1e-7, ds_max=1e-6, max_points=3, direction=-1, shooting="multiple",
+              tol=1e-11, rtol=1e-13, atol=1e-15)  # fmt: skip
+    mesh, starts = multi.segments
+    assert mesh[0] == 0 and mesh[-1] == 1 and np.array_equal(starts[0], multi.points[0])
+    with pytest.raises(ValueError, match="could not be corrected"):
+        ssf.continue_orbit(dataclasses.replace(multi, segments=None), "eta", (3.3, 3.33), **kw)
+    branch = ssf.continue_orbit(multi, "eta", (3.3, 3.33), **kw)
+    assert branch.status == "max-points" and branch.values[0] == ETA_UNSTABLE
+    assert np.all(np.diff(branch.values) < 0)
+    np.testing.assert_allclose(branch.points[0], multi.points[0], rtol=0, atol=1e-10)
+    mu = np.abs(branch.multipliers[:, 0])
+    assert np.all(np.diff(mu) > 0) and 1e8 < mu[0] and mu[-1] < 2e8  # away from the fold
+    # each point is an orbit for multiple shooting on another mesh too (16 even cuts)
+    for eta, z, T in zip(branch.values[1:], branch.points[1:], branch.T[1:]):
+        other = ssf.find_orbit(s.replace(eta=float(eta)), z, 1, shooting="multiple",
+                               segments=16, tol=1e-11, rtol=1e-13, atol=1e-15)  # fmt: skip
+        assert other.converged and np.max(np.abs(other.points[0] - z)) < 1e-9, other
+        assert abs(other.T - T) < 1e-9
 
 
 def test_multiple_shooting_branch_points_are_fixed_points_of_the_return_map():

@@ -63,14 +63,22 @@ def ms_evaluator(system0, param: str, segments: int, rtol: float, atol: float, f
     return evaluate, system_at, shooting_at
 
 
-def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit=None):
+def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit=None,
+             known=None):  # fmt: skip
     """(x, mesh): x = (u, lambda) of the orbit through z (period T) on the section, corrected
     by Newton at fixed lambda, or None if it does not converge. With ``mesh_limit``, the
     mesh is refined where a segment amplifies more than that (:func:`refine_mesh`) and
-    the orbit corrected again on it."""
+    the orbit corrected again on it. ``known``: (mesh, starts) of the orbit already cut
+    into segments (``Orbit.segments``); they replace ``segments`` and the one trajectory
+    from z, which for a very unstable orbit leaves it within the period."""
+    if known is not None:
+        segments = np.asarray(known[0], dtype=float)
     _, _, shooting_at = ms_evaluator(system, param, segments, rtol, atol, fd_step)
     ms = shooting_at(getattr(system, param), None)
-    st, Y = initial_segments(ms, z, T)
+    if known is None:
+        st, Y = initial_segments(ms, z, T)
+    else:
+        st, Y = "ok", np.array(known[1], dtype=float)
     if st != "ok":
         return None, ms.mesh
     status, _, u, _, _, _, _ = newton_multiple(ms, ms.pack(Y, T), tol, 12)

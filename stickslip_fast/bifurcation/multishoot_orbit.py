@@ -161,4 +161,5 @@ def find_orbit_multiple(
         multipliers=mult, stable=bool(converged and np.all(np.abs(mult) < 1.0)),
         jacobian=product(factors), residual=float(res), iterations=total_it,
         converged=converged, status=status, message=message, history=history,
+        segments=(np.array(ms.mesh, dtype=float), np.array(Y, dtype=float)),
     )  # fmt: skip

@@ -201,7 +201,9 @@ shooting : {"single", "multiple", "auto"}
     point on (same direction in the parameter, the tightest stage's
     tolerances), appended to the branch (``status`` names both ends).
 segments : int
-    m >= 1, the segments of multiple shooting.
+    m >= 1, the segments of multiple shooting (even cuts in time). An orbit
+    found by multiple shooting starts on its own segments (``Orbit.segments``)
+    instead: its mesh, and its segment starts as the first guess.
 remesh : bool
     Multiple shooting only: cut the segments again along the branch wherever
     one amplifies by more than ``multishoot.REMESH_LIMIT`` (merge neighbours that
@@ -282,10 +284,11 @@ def _continue_multiple_from(
     remesh: bool = False,
 ) -> Branch:
     """continue_orbit with shooting="multiple": the orbit corrected by multiple shooting
-    (``segments`` even cuts, refined by :data:`MESH_LIMIT`), then continued."""
+    (``segments`` even cuts, or the orbit's own segments if it was found by multiple
+    shooting; refined by :data:`MESH_LIMIT`), then continued."""
     rtol, atol, fd_step, tol = kw["rtol"], kw["atol"], kw["fd_step"], kw["tol"]
     x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, segments, rtol, atol,
-                        fd_step, tol, MESH_LIMIT)  # fmt: skip
+                        fd_step, tol, MESH_LIMIT, known=orbit.segments)  # fmt: skip
     if x0 is None:
         raise ValueError("orbit could not be corrected by multiple shooting")
     return continue_multiple(orbit.system, param, orbit.period, x0, direction, bounds,

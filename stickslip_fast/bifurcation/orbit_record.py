@@ -52,6 +52,12 @@ class Orbit:
         One of :data:`ORBIT_STATUSES`.
     message : str
         What happened, in words (why it failed, for a failure).
+    segments : tuple of (ndarray, ndarray) or None
+        Multiple shooting only: ``(mesh, starts)``, the mesh as fractions of T
+        (shape (m + 1,), from 0 to 1) and the segments' start states (shape
+        (m, n_state); ``starts[0]`` is ``points[0]``). ``continue_orbit`` starts
+        from them: past a multiplier of ~1e8 one trajectory from ``points[0]`` does
+        not stay near the orbit for a whole period. None for single shooting.
     """
 
     system: System
@@ -68,6 +74,7 @@ class Orbit:
     status: str
     message: str = ""
     history: list[float] = field(default_factory=list, repr=False)
+    segments: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
 
     @property
     def state_names(self) -> list[str]:
