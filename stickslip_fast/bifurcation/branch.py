@@ -164,18 +164,11 @@ class Branch:
         """
         import h5py
 
+        from ..io.base import check_kind
         from ..model.system import System
 
         with h5py.File(path, "r") as h5:
-            kind = h5.attrs.get("kind")
-            if kind != "branch":
-                raise ValueError(f"{path}: not a branch file (kind = {kind!r})")
-            version = int(h5.attrs.get("schema_version", -1))
-            if version not in READABLE_BRANCH_SCHEMAS:
-                raise ValueError(
-                    f"{path}: branch schema_version {version}; this version reads "
-                    f"{', '.join(map(str, READABLE_BRANCH_SCHEMAS))}"
-                )
+            check_kind(path, h5, "branch", READABLE_BRANCH_SCHEMAS)
             kinds = [k.decode() if isinstance(k, bytes) else str(k)
                      for k in h5["bifurcation_kind"][()]]  # fmt: skip
             values = h5["values"][()]

@@ -218,6 +218,15 @@ def _power_step(prob, y, f0, v, ytmp, fv) -> float:
     return 0.0 if norm == 0.0 else math.inf
 
 
+@njit(inline="always", **_JIT)
+def _switch_mode(ist, mode, count_slot) -> None:
+    """Enter ``mode`` (0 explicit, 1 Rosenbrock): count the switch, clear both step counts."""
+    ist[A_MODE] = mode
+    ist[count_slot] += 1
+    ist[A_N_STIFF] = 0
+    ist[A_N_CALM] = 0
+
+
 @overload(stepper_init, **_OVL)
 def _auto_init(method, prob, lin, y, ws):
     if _is(method, AutoMethod):
@@ -284,10 +293,7 @@ def _auto_accept(method, prob, lin, y, ws, modified):
                 if ist[A_N_STIFF] >= method.to_stiff_after:
                     # to Rodas5P: f(y) is the FSAL stage; start the power iteration
                     # on the stiff direction the estimate saw (y1 - y6)
-                    ist[A_MODE] = 1
-                    ist[A_TO_STIFF] += 1
-                    ist[A_N_STIFF] = 0
-                    ist[A_N_CALM] = 0
+                    _switch_mode(ist, 1, A_TO_STIFF)
                     ws.flags[0] = 0
                     nv = 0.0
                     for i in range(n):
@@ -308,10 +314,7 @@ def _auto_accept(method, prob, lin, y, ws, modified):
             else:
                 ist[A_N_CALM] = 0
             if ist[A_N_CALM] >= method.to_explicit_after:
-                ist[A_MODE] = 0
-                ist[A_TO_EXPLICIT] += 1
-                ist[A_N_CALM] = 0
-                ist[A_N_STIFF] = 0
+                _switch_mode(ist, 0, A_TO_EXPLICIT)
                 for i in range(n):
                     ws.K[0, i] = ws.f0[i]  # DOPRI5's first stage
 

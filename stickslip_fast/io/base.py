@@ -144,6 +144,26 @@ def open_h5(path: str | Path, *, check_truncation: bool = True) -> h5py.File:
     return h5py.File(fid)
 
 
+def check_kind(path: str | Path, h5: h5py.File, kind: str, readable: tuple[int, ...]) -> int:
+    """The ``schema_version`` of an open file whose root ``kind`` must be ``kind``.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: its ``kind`` is another, or its version is not in ``readable``.
+    """
+    found = h5.attrs.get("kind")
+    if found != kind:
+        raise ValueError(f"{path}: not a {kind} file (kind = {found!r})")
+    version = int(h5.attrs.get("schema_version", -1))
+    if version not in readable:
+        raise ValueError(
+            f"{path}: {kind} schema_version {version}; this version reads "
+            f"{', '.join(map(str, readable))}"
+        )
+    return version
+
+
 def _short(exc: BaseException) -> str:
     """The first line of an HDF5 error message, without h5py's prefix noise."""
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

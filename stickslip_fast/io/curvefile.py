@@ -11,6 +11,8 @@ from typing import Any
 import h5py
 import numpy as np
 
+from .base import check_kind
+
 #: Version of the layout written by :func:`write_curve`.
 CURVE_SCHEMA = 1
 
@@ -69,14 +71,7 @@ def read_curve(path: str | Path) -> dict[str, Any]:
         If the file is not a curve file of a known schema (naming what is wrong).
     """
     with h5py.File(path, "r") as h5:
-        kind = h5.attrs.get("kind")
-        if kind != "curve":
-            raise ValueError(f"{path}: not a curve file (kind = {kind!r})")
-        version = int(h5.attrs.get("schema_version", -1))
-        if version != CURVE_SCHEMA:
-            raise ValueError(
-                f"{path}: curve schema_version {version}; this version reads {CURVE_SCHEMA}"
-            )
+        check_kind(path, h5, "curve", (CURVE_SCHEMA,))
         out: dict[str, Any] = {name: h5.attrs[name] for name in CURVE_ATTRS}
         out.update({name: h5[name][()] for name in CURVE_DATASETS})
         out["codim2_kind"] = [k.decode() if isinstance(k, bytes) else str(k)
