@@ -5,8 +5,9 @@ known stable manifold x = A y^2 + B z^2: a coarse grid's sign changes of g_n giv
 on the known curve (parabola, closed ellipse) to 1e-10, and tracing from them gives the
 curve traced from a hand-given seed; a plane that misses the manifold gives no seed.
 For the model: the P1 saddle past Fig. 6's upper fold, on a 4 x 4 grid around a piece of
-its manifold. Cost: about 1 s for the maps; the model test a few seconds once the
-orbit kernels are compiled (the fixture of test_basins_manifold).
+its manifold, and seeds="scan" on a 3 x 3 basin map's own grid with the result stored in
+its file. Cost on the shared 2-core VM: 1-8 s for each map test; 7 s and 4 s for the model
+tests once the orbit and census kernels are compiled (the fixture of test_basins_manifold).
 """
 
 import numpy as np
@@ -114,3 +115,19 @@ def test_model_scan_finds_the_fold_saddles_manifold(fold_saddle):
     assert sc["edges"] == 9 and sc["edge_status"] == {"seed": 9}
     d = hand.distance_to(m.uv)
     assert np.sum(d < 1e-7) >= 2 and np.sum((d > 2e-5) & (d < 2e-4)) >= 2
+
+
+def test_model_scan_on_a_maps_own_grid_is_stored_in_its_file(fold_saddle, tmp_path):
+    # seeds="scan" on a BasinsResult scans the map's own grid; the summary goes to the file
+    s = fold_saddle.system
+    g1 = np.linspace(SEED[0] - 1e-3, SEED[0] + 1e-3, 3)
+    g2 = np.linspace(SEED[1] - 1e-3, SEED[1] + 1e-3, 3)
+    res = ssf.basins(s, (g1, g2), out=tmp_path / "b.h5", progress=False, entropy_box=3)
+    m = ssf.stable_manifold(res, fold_saddle, seeds="scan", ds=4e-4, r_local=1e-6, n_max=12,
+                            max_points=2)  # fmt: skip
+    sc = m.settings["scan"]
+    assert sc["grid"] == [3, 3] and sc["seeds"] >= 1 and len(m.u) >= 2
+    assert m.settings["skip_radius"] == pytest.approx(0.25 * 1e-3)
+    back = ssf.load_basins(tmp_path / "b.h5").manifold
+    assert back.settings == m.settings and back.settings["seeds"] == "scan"
+    np.testing.assert_array_equal(back.uv, m.uv)
