@@ -35,7 +35,7 @@ from .bifurcation.continuation import (
 )
 from .bifurcation.curve import Codim2Point, Curve, continue_bifurcation
 from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
-from .bifurcation.stable_manifold import stable_manifold
+from .bifurcation.stable_manifold import manifold_seeds, stable_manifold
 from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
 from .model.system import PRESETS, SWEEPABLE, System
@@ -57,6 +57,7 @@ __all__ = [
     "BasinsResult",
     "load_basins",
     "stable_manifold",
+    "manifold_seeds",
     "StableManifold",
     "MODES",
     "largest_lyapunov",

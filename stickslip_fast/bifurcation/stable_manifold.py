@@ -28,7 +28,7 @@ from .returnmap import (
     return_map,
 )
 
-__all__ = ["stable_manifold", "plane_crossings"]
+__all__ = ["stable_manifold", "manifold_seeds", "plane_crossings"]
 
 
 def plane_crossings(
@@ -105,6 +105,129 @@ def _saddles(system: System, orbit: Any, rtol: float, atol: float) -> tuple:
     return pts, local_saddles(pts[:, mask], jacs)
 
 
+def _plane_map(system: System, b: np.ndarray, dirs: np.ndarray, rtol: float, atol: float):
+    """``crossings(uv, n)`` of the tracer: the first n crossings from the plane's points."""
+
+    def crossings(uv: np.ndarray, n: int) -> np.ndarray:
+        states = b + uv[:, :1] * dirs[0] + uv[:, 1:2] * dirs[1]
+        return plane_crossings(system, states, n, rtol=rtol, atol=atol)
+
+    return crossings
+
+
+def _scan_summary(scanned: dict) -> dict:
+    """What the seed scan found, for ``StableManifold.settings["scan"]`` (JSON)."""
+    st = scanned["edge_status"]
+    return {"grid": list(scanned["closest"].shape), "r_scan": scanned["r_scan"],
+            "n_max": scanned["n_max"], "edges": len(st), "seeds": int(st.count("seed")),
+            "edge_status": {k: st.count(k) for k in sorted(set(st))},
+            "closest": float(np.min(scanned["closest"])), "n_evals": int(scanned["n_evals"])}  # fmt: skip
+
+
+def manifold_seeds(
+    target: Any,
+    orbit: Any,
+    *,
+    grid: Any = None,
+    plane: Any = None,
+    base: Any = None,
+    bounds: Any = None,
+    n_max: int = 30,
+    r_scan: float = 1e-2,
+    r_local: float = 1e-4,
+    tol: float = 1e-11,
+    rtol: float = _DEFAULT_RTOL,
+    atol: float = _DEFAULT_ATOL,
+) -> dict:
+    """Seeds on a saddle orbit's stable manifold in a plane, from a scan of a grid.
+
+    Every grid node p is mapped ``n_max`` times; an edge between neighbouring
+    nodes whose values of g_n = w . (P^n(p) - x*) have opposite signs, at the same
+    n and orbit point x*, while the stable parts of both images (P^n - x* less its
+    unstable component) lie within ``r_scan`` of x*, straddles the manifold: the
+    root of g_n along the edge is found and n raised (by the period) until its
+    image lies within ``r_local`` of x* (the tracer's condition). See
+    :func:`stickslip_fast.analysis.basins_seeds.scan_seeds` and docs/basins.md.
+    A piece of the manifold thinner than a grid cell, or whose two sides leave
+    the saddle on the same side, gives no sign change and no seed.
+
+    Parameters
+    ----------
+    target : BasinsResult or System
+        A basin map (its system, plane, base and grid), or a System with
+        ``plane``, ``base`` and ``bounds`` as for :func:`stable_manifold`.
+    orbit : Orbit
+        The saddle orbit (exactly one real multiplier outside the unit circle).
+    grid : int or (array_like, array_like), optional
+        ``n`` for an n x n grid over the plane's box, or the two axes. Default:
+        the map's own grid; with a System, 32 x 32 over ``bounds``.
+    n_max : int
+        Crossings per node, and the largest n of a seed.
+    r_scan : float
+        Radius (max norm, section units) for the stable parts of both ends' images.
+    r_local, tol : float
+        The tracer's neighbourhood radius and the root's bracket length (plane units).
+    rtol, atol : float
+        Integration tolerances of the return map.
+
+    Returns
+    -------
+    dict
+        ``uv`` (k, 2) the seeds (plane coordinates) with ``n``, ``target``,
+        ``residual``, ``distance`` at each; ``edges``, ``edge_n``,
+        ``edge_target``, ``edge_status`` (one per sign-change edge), ``closest``
+        (the grid's shape: each node's smallest distance to the orbit over its
+        n_max crossings), ``g1``, ``g2``, ``r_scan``, ``n_max``, ``n_evals``.
+
+    Raises
+    ------
+    ValueError
+        Naming the bad argument (``grid``, ``g1``/``g2``, ``n_max``, ``r_scan``,
+        ``r_local``, ``tol``), or if the orbit is not a saddle of index one.
+    """
+    from ..analysis.basins_seeds import check_axis, scan_seeds
+
+    system, b, dirs, box, result = _plane_of(target, plane, base, bounds)
+    if grid is None:
+        grid = (result.g1, result.g2) if result is not None else 32
+    if np.isscalar(grid):
+        if int(grid) != grid or int(grid) < 2:
+            raise ValueError(f"grid must be an integer >= 2 or two axes, got {grid!r}")
+        g1, g2 = (np.linspace(box[k, 0], box[k, 1], int(grid)) for k in (0, 1))
+    elif len(grid) == 2:
+        g1, g2 = check_axis("g1", grid[0]), check_axis("g2", grid[1])
+    else:
+        raise ValueError(f"grid must be an integer >= 2 or two axes, got {grid!r}")
+    pts, saddles = _saddles(system, orbit, rtol, atol)
+    out = scan_seeds(_plane_map(system, b, dirs, rtol, atol), saddles, g1, g2,
+                     period=int(orbit.period), n_max=n_max, r_scan=r_scan, r_local=r_local,
+                     tol=tol)  # fmt: skip
+    out.update(g1=g1, g2=g2, r_scan=float(r_scan), n_max=int(n_max))
+    return out
+
+
+def _resolve_seeds(seeds, scan, result, trace: dict, target, orbit, **plane_kw) -> tuple:
+    """(seeds, trace settings, scan record or None) of :func:`stable_manifold`."""
+    scanned = None
+    if isinstance(seeds, str):
+        if seeds != "scan":
+            raise ValueError(f"seeds must be points (k, 2), None or 'scan', got {seeds!r}")
+        kw = {k: trace[k] for k in ("r_local", "n_max", "tol") if k in trace}
+        kw.update(scan or {})
+        scanned = manifold_seeds(target, orbit, **plane_kw, **kw)
+        seeds = scanned["uv"]
+        spacing = min(np.min(np.diff(scanned["g1"])), np.min(np.diff(scanned["g2"])))
+        trace = {"skip_radius": 0.25 * float(spacing), **trace}  # one curve, many edges
+    elif scan is not None:
+        raise ValueError("scan is an option of seeds='scan'; seeds were given otherwise")
+    if seeds is None:
+        if result is None or result.boundary is None:
+            raise ValueError("seeds not given and the map has no refined boundary to seed from")
+        ok = result.boundary.status == 0
+        seeds = np.stack([result.boundary.u[ok], result.boundary.v[ok]], axis=1)
+    return seeds, trace, scanned
+
+
 def stable_manifold(
     target: Any,
     orbit: Any,
@@ -116,6 +239,7 @@ def stable_manifold(
     rtol: float = _DEFAULT_RTOL,
     atol: float = _DEFAULT_ATOL,
     store: bool = True,
+    scan: dict | None = None,
     **trace: Any,
 ) -> StableManifold:
     """The stable manifold of a saddle orbit intersected with a plane of starts, as curves.
@@ -137,9 +261,12 @@ def stable_manifold(
         ``points`` (p, n_state) on the section and ``period`` (e.g. from an
         unstable point of a :func:`continue_orbit` branch). It must have exactly
         one real multiplier outside the unit circle.
-    seeds : array_like (k, 2), optional
+    seeds : array_like (k, 2) or "scan", optional
         Plane points near the curve. Default: the map's refined boundary points
-        (:func:`refine_boundary`, status 0).
+        (:func:`refine_boundary`, status 0). ``"scan"``: from the saddle alone,
+        :func:`manifold_seeds` over the map's grid (or ``scan["grid"]``) with the
+        tracer's ``r_local``, ``n_max``, ``tol``; recorded in ``settings["scan"]``;
+        ``skip_radius`` then defaults to a quarter of the grid's spacing.
     plane, base, bounds
         With a System: the plane as for :func:`basins`, and its box
         [[u_min, u_max], [v_min, v_max]].
@@ -147,6 +274,8 @@ def stable_manifold(
         Integration tolerances of the return map.
     store : bool
         Write ``/basins/manifold`` into the map's file (and set ``target.manifold``).
+    scan : dict, optional
+        With ``seeds="scan"``: arguments of :func:`manifold_seeds` (``grid``, ``r_scan``, ...).
     **trace
         Settings of :func:`trace_manifold`: ``ds``, ``ds_min``, ``ds_max``, ``tol``,
         ``r_local``, ``n_max``, ``max_points``, ``max_angle``, ``seed_radius``,
@@ -157,20 +286,17 @@ def stable_manifold(
     StableManifold
     """
     system, b, dirs, box, result = _plane_of(target, plane, base, bounds)
-    if seeds is None:
-        if result is None or result.boundary is None:
-            raise ValueError("seeds not given and the map has no refined boundary to seed from")
-        ok = result.boundary.status == 0
-        seeds = np.stack([result.boundary.u[ok], result.boundary.v[ok]], axis=1)
+    seeds, trace, scanned = _resolve_seeds(
+        seeds, scan, result, trace, target, orbit, plane=plane, base=base, bounds=bounds,
+        rtol=rtol, atol=atol,
+    )  # fmt: skip
     pts, saddles = _saddles(system, orbit, rtol, atol)
-
-    def crossings(uv: np.ndarray, n: int) -> np.ndarray:
-        states = b + uv[:, :1] * dirs[0] + uv[:, 1:2] * dirs[1]
-        return plane_crossings(system, states, n, rtol=rtol, atol=atol)
-
-    r = trace_manifold(crossings, saddles, seeds, box, period=int(orbit.period), **trace)
+    r = trace_manifold(_plane_map(system, b, dirs, rtol, atol), saddles, seeds, box,
+                       period=int(orbit.period), **trace)  # fmt: skip
     settings = {k: (v if np.isscalar(v) else np.asarray(v).tolist()) for k, v in trace.items()}
     settings.update(rtol=rtol, atol=atol, seed_status=r["seed_status"])
+    if scanned is not None:
+        settings.update(seeds="scan", scan=_scan_summary(scanned))
     m = StableManifold(
         r["uv"][:, 0], r["uv"][:, 1], r["branch"], r["n"], r["target"], r["residual"],
         r["distance"], r["branch_status"], pts, int(orbit.period),
