@@ -283,4 +283,8 @@ def test_edge_check_follows_brackets_and_measures_distances(ref):
     # the two ends of each bracket reach different attractors, so their runs split
     assert np.all(e.split_crossing >= 0) and np.all(np.isfinite(e.t_split))
     assert np.nanmin(e.control_min_distance) < 1e-6  # a control run settles on the orbit
+    # runs that settle to rest are measured too (their crossings on the way there):
+    # every run has a distance, and one that slides ends far from the orbit
+    assert np.all(np.isfinite(e.control_min_distance)) and np.all(np.isfinite(e.min_distance))
+    assert np.nanmax(e.control_min_distance) > 1e-3
     assert e.distances.shape[0] == len(e.u)

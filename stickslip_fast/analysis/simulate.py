@@ -229,6 +229,38 @@ def _run_kernel(
     )  # fmt: skip
 
 
+def _ring_points(b: _RunBuffers, n_cross: int, max_points: int) -> tuple:
+    """(times, states) of the last ``max_points`` recorded crossings, in time order."""
+    k = min(n_cross, max_points)
+    pts = np.empty((k, b.ring.shape[1]))
+    tp = np.empty(k)
+    unroll_ring(b.ring, b.tring, n_cross, pts, tp)
+    return tp, pts
+
+
+def recorded_crossings(
+    system: System, t_end: float, y0=None, *, rtol: float | None = None,
+    atol: float | None = None, max_points: int = 4096,
+) -> tuple[np.ndarray, np.ndarray, str]:  # fmt: skip
+    """The Poincare points of one run from t = 0, whatever its status.
+
+    :func:`simulate` returns points only for status ``"ok"``: those of a run that
+    comes to rest are its transient, not an attractor's. Edge tracking needs
+    exactly that transient (how long a start near a basin boundary shadows a
+    saddle before it settles), so this returns the last ``max_points`` recorded
+    crossings (times, states) with the status, under ``simulate``'s default
+    settings otherwise (Rodas5P, fixed stopping).
+    """
+    s = Settings.resolve(
+        "rodas5p", t_end, 0.0, rtol, atol, None, max_points, None, DEFAULT_EQUILIBRIUM_TOL,
+        None,
+    )  # fmt: skip
+    bufs = _RunBuffers.allocate(system, s, None)
+    code = _run_kernel(system, s, system.initial_state(y0), None, bufs)
+    tp, pts = _ring_points(bufs, int(bufs.stat_i[I_CROSSINGS]), s.max_points)
+    return tp, pts, STATUS_NAMES[code]
+
+
 def _result(
     system: System, s: Settings, status: str, sample_dt: float | None, b: _RunBuffers
 ) -> SimulationResult:
@@ -236,16 +268,12 @@ def _result(
     n = system.n_state
     stat_i, stat_f = b.stat_i, b.stat_f
     n_cross = int(stat_i[I_CROSSINGS])
-    k = min(n_cross, s.max_points)
-    pts = np.empty((k, n))
-    tp = np.empty(k)
     period = 0
     if status == "ok":
-        unroll_ring(b.ring, b.tring, n_cross, pts, tp)
-        period = int(detect_period(pts, k, s.period_tol, MAX_PERIOD))
+        tp, pts = _ring_points(b, n_cross, s.max_points)
+        period = int(detect_period(pts, len(tp), s.period_tol, MAX_PERIOD))
     else:
-        pts = pts[:0]
-        tp = tp[:0]
+        tp, pts = np.empty(0), np.empty((0, n))
     t = y = None
     if sample_dt is not None:
         m = int(stat_i[I_SAMPLES])

@@ -10,6 +10,7 @@ nearly recurrent Poincare point, or given. See docs/basins.md.
 from __future__ import annotations
 
 import warnings
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -125,7 +126,7 @@ def edge_check(
     store : bool
         Write ``/basins/edge`` into the result's file.
     """
-    from ..analysis.simulate import simulate
+    from ..analysis.simulate import recorded_crossings
 
     b = result.boundary
     if b is None:
@@ -137,7 +138,13 @@ def edge_check(
     kw = dict(rtol=s["rtol"], atol=s["atol"], max_points=4096)
 
     def run(states):
-        return [simulate(result.system, t_end, y0=y, **kw) for y in states]
+        # every recorded crossing, also of runs that settle to rest (their approach is
+        # the edge tracking's signal; simulate returns points only for status "ok")
+        out = []
+        for y in states:
+            t, pts, _ = recorded_crossings(result.system, t_end, y, **kw)
+            out.append(SimpleNamespace(t_poincare=t, poincare=pts))
+        return out
 
     runs = run(result.state_at(b.ua[pick]))
     runs_b = run(result.state_at(b.ub[pick]))
