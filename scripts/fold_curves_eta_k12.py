@@ -3,10 +3,15 @@
 Locates each fold on a one-parameter branch in eta at k12 = -0.8 (the paper's
 asymmetric set) and follows it in k12 with :func:`stickslip_fast.continue_bifurcation`,
 writing ``data/curves/p1_fold_{upper,lower}_eta_k12.h5``. About 15-20 min per
-curve of 800 points on a 2-core machine. ``scripts/plot_census_plane.py --curve``
-lays the files over the census maps of the same plane (docs/census.md).
+curve of 800 points on a 2-core machine. "closing" and "closing-lower" start instead
+from the upper and the lower fold at k12 = -0.8316 (eta = 2.6673, 2.5706) towards the
+curve's minimum in k12, (2.6193, -0.8317150), where the period-1 region closes; both
+stop short of it ("step-too-small" near eta = 2.6557 and 2.5978 with ``--tol 1e-9``;
+docs/reproduction.md, where the minimum is located by one-parameter continuations). ``scripts/plot_census_plane.py
+--curve`` lays the files over the census maps of the same plane (docs/census.md).
 
-    python3 scripts/fold_curves_eta_k12.py [upper|lower ...] [--points 800] [--out data/curves]
+    python3 scripts/fold_curves_eta_k12.py [upper|lower|closing|closing-lower ...]
+        [--points 800] [--out data/curves] [--tol 1e-10]
 """
 
 from __future__ import annotations
@@ -19,24 +24,31 @@ import numpy as np
 
 import stickslip_fast as ssf
 
-#: a start near the period-1 orbit, on the section, at each end of the region
+#: (eta, k12, a start near the period-1 orbit on the section, the eta interval of the
+#: branch that locates the fold, its direction, its first step)
 STARTS = {
-    "upper": (3.30, [0.07332092304307371, 0.0, 0.12221581726865255, -0.00674109106906407],
-              (3.30, 3.35), 1),
-    "lower": (1.9, [0.1115544410046177, 0.0, 0.12120838635656168, -0.00787487872112215],
-              (1.8, 1.9), -1),
+    "upper": (3.30, -0.8, [0.07332092304307371, 0.0, 0.12221581726865255, -0.00674109106906407],
+              (3.30, 3.35), 1, 2e-3),
+    "lower": (1.9, -0.8, [0.1115544410046177, 0.0, 0.12120838635656168, -0.00787487872112215],
+              (1.8, 1.9), -1, 2e-3),
+    "closing": (2.6, -0.8316, [0.11834572437245043, 0.0, 0.1459190815849308,
+                               -0.008125583378266665], (2.6, 2.8), 1, 1e-3),
+    "closing-lower": (2.6, -0.8316, [0.11834572437245043, 0.0, 0.1459190815849308,
+                                     -0.008125583378266665], (2.4, 2.6), -1, 1e-3),
 }  # fmt: skip
 
 
-def fold_curve(which: str, points: int) -> ssf.Curve:
-    """Locate the fold at k12 = -0.8 and follow it towards lower k12."""
-    eta, y0, bounds, direction = STARTS[which]
-    orbit = ssf.find_orbit(ssf.System.preset("asymmetric", eta=eta), np.array(y0), 1)
-    branch = ssf.continue_orbit(orbit, "eta", bounds, ds=2e-3, ds_max=5e-3, max_points=100,
+def fold_curve(which: str, points: int, tol: float = 1e-10) -> ssf.Curve:
+    """Locate the fold at the start's k12 and follow it towards lower k12 (the curve ends
+    where it comes back to that k12, or after ``points``)."""
+    eta, k12, y0, bounds, direction, ds = STARTS[which]
+    orbit = ssf.find_orbit(ssf.System.preset("asymmetric", eta=eta, k12=k12), np.array(y0), 1)
+    branch = ssf.continue_orbit(orbit, "eta", bounds, ds=ds, ds_max=5e-3, max_points=100,
                                 stick_events=False, direction=direction)  # fmt: skip
     fold = next(b for b in branch.bifurcations if b.kind == "fold")
-    return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6), direction=-1, ds=0.005,
-                                    ds_max=0.05, max_points=points, tol=1e-10)  # fmt: skip
+    return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6 if k12 == -0.8 else k12),
+                                    direction=-1, ds=0.005,
+                                    ds_max=0.05, max_points=points, tol=tol)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -44,10 +56,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("which", nargs="*", default=["upper", "lower"], choices=sorted(STARTS))
     p.add_argument("--points", type=int, default=800, help="curve points (default 800)")
     p.add_argument("--out", default="data/curves", help="folder of the curve files")
+    p.add_argument("--tol", type=float, default=1e-10, help="of the curve's corrector")
     args = p.parse_args(argv)
     for which in args.which:
         t0 = time.perf_counter()
-        curve = fold_curve(which, args.points)
+        curve = fold_curve(which, args.points, args.tol)
         path = Path(args.out) / f"p1_fold_{which}_eta_k12.h5"
         path.parent.mkdir(parents=True, exist_ok=True)
         curve.to_hdf5(path)
