@@ -3,15 +3,15 @@
 Locates each fold on a one-parameter branch in eta at k12 = -0.8 (the paper's
 asymmetric set) and follows it in k12 with :func:`stickslip_fast.continue_bifurcation`,
 writing ``data/curves/p1_fold_{upper,lower}_eta_k12.h5``. About 15-20 min per
-curve of 800 points on a 2-core machine. "closing" and "closing-lower" start instead
-from the upper and the lower fold at k12 = -0.8316 (eta = 2.6673, 2.5706) towards the
-curve's minimum in k12, (2.6193, -0.8317150), where the period-1 region closes; both
-stop short of it ("step-too-small" near eta = 2.6557 and 2.5978 with ``--tol 1e-9``;
-docs/reproduction.md, where the minimum is located by one-parameter continuations). ``scripts/plot_census_plane.py
+curve of 800 points on a 2-core machine. "closing" starts instead from the lower fold
+at k12 = -0.8316 (eta = 2.5706) and follows the curve through its minimum in k12,
+(2.6193, -0.8317150), where the period-1 region closes, back to -0.8316 on the upper
+fold (61 points, ~1 min; ``p1_fold_closing_eta_k12.h5``, docs/reproduction.md). It
+needs the test function's difference step h = 1e-9 (and tol 1e-9): with the default
+h = 1e-7 the curve stalls 0.02-0.04 short of the minimum. ``scripts/plot_census_plane.py
 --curve`` lays the files over the census maps of the same plane (docs/census.md).
 
-    python3 scripts/fold_curves_eta_k12.py [upper|lower|closing|closing-lower ...]
-        [--points 800] [--out data/curves] [--tol 1e-10]
+    python3 scripts/fold_curves_eta_k12.py [upper|lower|closing ...] [--points 800] [--out data/curves]
 """
 
 from __future__ import annotations
@@ -32,13 +32,15 @@ STARTS = {
     "lower": (1.9, -0.8, [0.1115544410046177, 0.0, 0.12120838635656168, -0.00787487872112215],
               (1.8, 1.9), -1, 2e-3),
     "closing": (2.6, -0.8316, [0.11834572437245043, 0.0, 0.1459190815849308,
-                               -0.008125583378266665], (2.6, 2.8), 1, 1e-3),
-    "closing-lower": (2.6, -0.8316, [0.11834572437245043, 0.0, 0.1459190815849308,
-                                     -0.008125583378266665], (2.4, 2.6), -1, 1e-3),
+                               -0.008125583378266665], (2.4, 2.6), -1, 1e-3),
 }  # fmt: skip
 
+#: the curve's corrector tolerance and difference step h (continue_bifurcation)
+CURVE_KW = {"upper": dict(tol=1e-10), "lower": dict(tol=1e-10),
+            "closing": dict(tol=1e-9, h=1e-9)}  # fmt: skip
 
-def fold_curve(which: str, points: int, tol: float = 1e-10) -> ssf.Curve:
+
+def fold_curve(which: str, points: int) -> ssf.Curve:
     """Locate the fold at the start's k12 and follow it towards lower k12 (the curve ends
     where it comes back to that k12, or after ``points``)."""
     eta, k12, y0, bounds, direction, ds = STARTS[which]
@@ -48,7 +50,7 @@ def fold_curve(which: str, points: int, tol: float = 1e-10) -> ssf.Curve:
     fold = next(b for b in branch.bifurcations if b.kind == "fold")
     return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6 if k12 == -0.8 else k12),
                                     direction=-1, ds=0.005,
-                                    ds_max=0.05, max_points=points, tol=tol)  # fmt: skip
+                                    ds_max=0.05, max_points=points, **CURVE_KW[which])  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -56,11 +58,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("which", nargs="*", default=["upper", "lower"], choices=sorted(STARTS))
     p.add_argument("--points", type=int, default=800, help="curve points (default 800)")
     p.add_argument("--out", default="data/curves", help="folder of the curve files")
-    p.add_argument("--tol", type=float, default=1e-10, help="of the curve's corrector")
     args = p.parse_args(argv)
     for which in args.which:
         t0 = time.perf_counter()
-        curve = fold_curve(which, args.points, args.tol)
+        curve = fold_curve(which, args.points)
         path = Path(args.out) / f"p1_fold_{which}_eta_k12.h5"
         path.parent.mkdir(parents=True, exist_ok=True)
         curve.to_hdf5(path)
