@@ -8,10 +8,13 @@ at k12 = -0.8316 (eta = 2.5706) and follows the curve through its minimum in k12
 (2.6193, -0.8317150), where the period-1 region closes, back to -0.8316 on the upper
 fold (61 points, ~1 min; ``p1_fold_closing_eta_k12.h5``, docs/reproduction.md). It
 needs the test function's difference step h = 1e-9 (and tol 1e-9): with the default
-h = 1e-7 the curve stalls 0.02-0.04 short of the minimum. ``scripts/plot_census_plane.py
+h = 1e-7 the curve stalls 0.02-0.04 short of the minimum. ``--resume`` goes on from the
+end of a stored curve with those settings (upper, lower: both pass the minimum;
+``p1_fold_{upper,lower}_resumed_eta_k12.h5``). ``scripts/plot_census_plane.py
 --curve`` lays the files over the census maps of the same plane (docs/census.md).
 
     python3 scripts/fold_curves_eta_k12.py [upper|lower|closing ...] [--points 800] [--out data/curves]
+        [--resume]
 """
 
 from __future__ import annotations
@@ -53,16 +56,37 @@ def fold_curve(which: str, points: int) -> ssf.Curve:
                                     ds_max=0.05, max_points=points, **CURVE_KW[which])  # fmt: skip
 
 
+def resume_curve(path: Path, points: int) -> ssf.Curve:
+    """Go on from the last point of a curve file towards lower k12 with the closing
+    settings (h = 1e-9, tol = 1e-9), from the fold there on a one-point branch."""
+    old = ssf.Curve.from_hdf5(path)
+    (eta, k12), z = (float(v) for v in old.values[-1]), old.points[-1]
+    nan = np.full(1, np.nan)
+    branch = ssf.Branch(old.system.replace(eta=eta, k12=k12), "eta", 1, np.array([eta]),
+                        z[None, :], nan, np.full((1, z.size - 1), np.nan, complex),
+                        np.zeros(1, bool))  # fmt: skip
+    fold = ssf.Bifurcation("fold", eta, 0, z.copy())
+    return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6), direction=-1, ds=0.005,
+                                    ds_max=0.05, max_points=points, **CURVE_KW["closing"])  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("which", nargs="*", default=["upper", "lower"], choices=sorted(STARTS))
     p.add_argument("--points", type=int, default=800, help="curve points (default 800)")
     p.add_argument("--out", default="data/curves", help="folder of the curve files")
+    p.add_argument("--resume", action="store_true",
+                   help="go on from the end of p1_fold_WHICH_eta_k12.h5 in --out "
+                        "(h = 1e-9), writing p1_fold_WHICH_resumed_eta_k12.h5")  # fmt: skip
     args = p.parse_args(argv)
     for which in args.which:
         t0 = time.perf_counter()
-        curve = fold_curve(which, args.points)
         path = Path(args.out) / f"p1_fold_{which}_eta_k12.h5"
+        if args.resume:
+            curve = resume_curve(path, args.points)
+            path = path.with_name(f"p1_fold_{which}_resumed_eta_k12.h5")
+        else:
+            curve = fold_curve(which, args.points)
         path.parent.mkdir(parents=True, exist_ok=True)
         curve.to_hdf5(path)
         print(f"{which}: {len(curve.values)} points to {curve.values[-1].tolist()} "
