@@ -133,3 +133,33 @@ def test_runner_passes_the_table_to_stable_manifold(monkeypatch):
     Orb.converged, Orb.status = False, "max-iter"
     with pytest.raises(ConfigError, match=r"\[basins\.manifold\]\.point: .*did not converge"):
         run_manifold(res, cfg.basins["manifold"])
+
+
+def test_cli_traces_the_fold_saddles_manifold_and_keeps_it_on_a_rerun(tmp_path, capsys):
+    # a 3 x 3 map around a piece of the fold saddle's manifold (tests/test_basins_seeds.py),
+    # seeds from the scan of the map's own grid
+    import stickslip_fast as ssf
+    from stickslip_fast.cli import main
+
+    seed = [0.0677029, -0.14516129]
+    g = [{"start": c - 1e-3, "stop": c + 1e-3, "num": 3} for c in seed]
+    cfg = tmp_path / "m.toml"
+    cfg.write_text(
+        f'[system]\npreset = "asymmetric"\neta = {FOLD_ETA!r}\n'
+        f'[basins]\nplane = ["x1", "phi1"]\nentropy_box = 3\n'
+        f"g1 = {{ start = {g[0]['start']!r}, stop = {g[0]['stop']!r}, num = 3 }}\n"
+        f"g2 = {{ start = {g[1]['start']!r}, stop = {g[1]['stop']!r}, num = 3 }}\n"
+        f'[basins.manifold]\npoint = {FOLD_SADDLE!r}\nseeds = "scan"\n'
+        "ds = 4e-4\nr_local = 1e-6\nn_max = 12\nmax_points = 2\n"
+    )
+    out = tmp_path / "m.h5"
+    assert main(["basins", str(cfg), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "manifold:" in text and "period-1 saddle (|mu| 4.713" in text and "seeds: scan" in text
+    m = ssf.load_basins(out).manifold
+    assert len(m.u) >= 2 and np.all(m.distance <= 1e-6)
+    assert m.settings["seeds"] == "scan" and m.settings["config"]["manifold"]["n_max"] == 12
+    # the same config again: the stored curve is kept
+    assert main(["basins", str(cfg), "-o", str(out)]) == 0
+    assert "stored for the same settings; not recomputed" in capsys.readouterr().out
+    np.testing.assert_array_equal(ssf.load_basins(out).manifold.uv, m.uv)
