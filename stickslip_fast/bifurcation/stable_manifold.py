@@ -28,7 +28,7 @@ from .returnmap import (
     return_map,
 )
 
-__all__ = ["stable_manifold", "manifold_seeds", "plane_crossings"]
+__all__ = ["stable_manifold", "manifold_seeds", "plane_crossings", "store_manifold"]
 
 
 def plane_crossings(
@@ -305,12 +305,12 @@ def stable_manifold(
         settings,
     )  # fmt: skip
     if result is not None and store:
-        _store(result, m)
+        store_manifold(result, m)
     return m
 
 
-def _store(result: Any, m: StableManifold) -> None:
-    """Set ``result.manifold`` and write ``/basins/manifold`` (replacing one there)."""
+def store_manifold(result: Any, m: StableManifold) -> None:
+    """Set ``result.manifold`` and write ``/basins/manifold`` into its file (replacing one there)."""
     result.manifold = m
     if result.path is not None:
         from ..io.basins import replace_subgroup

@@ -19,6 +19,10 @@ TOML layout (next to the usual ``[system]`` and ``[integration]`` tables)::
     n_tracks = 24
     t_end = 600.0
     near = 1e-3
+
+    [basins.manifold]      # optional: a saddle's stable manifold (cli.basins_manifold)
+    point = [0.0726, 0.0, 0.1222, -0.0067]
+    seeds = "boundary"     # (needs refine) or "scan"
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ __all__ = ["parse_basins_table", "cmd_basins", "basins_report", "is_basins_file"
 
 BASINS_KEYS = {
     "plane", "g1", "g2", "base", "stop", "chunk_size", "identity_tol", "entropy_box",
-    "refine", "edge",
+    "refine", "edge", "manifold",
 }  # fmt: skip
 _REFINE = {"tol": float, "max_segments": int, "seed": int}
 _EDGE = {"n_tracks": int, "t_end": float, "near": float, "seed": int}
@@ -53,8 +57,11 @@ def _sub(table: Any, name: str, types: dict) -> dict:
     return out
 
 
-def parse_basins_table(table: dict[str, Any]) -> dict[str, Any]:
-    """Validate a ``[basins]`` table (types only; :func:`basins` checks the values)."""
+def parse_basins_table(table: dict[str, Any], n_state: int | None = None) -> dict[str, Any]:
+    """Validate a ``[basins]`` table (types only; :func:`basins` checks the values).
+
+    ``n_state``: the system's state length, for ``[basins.manifold].point``.
+    """
     from .config_values import ConfigError, _values_from_spec
 
     unknown = set(table) - BASINS_KEYS
@@ -97,6 +104,11 @@ def parse_basins_table(table: dict[str, Any]) -> dict[str, Any]:
         if "refine" not in table:
             raise ConfigError("[basins.edge] needs [basins.refine] (it follows refined points)")
         out["edge"] = _sub(table["edge"], "edge", _EDGE)
+    if "manifold" in table:
+        from .basins_manifold import parse_manifold_table
+
+        out["manifold"] = parse_manifold_table(table["manifold"], has_refine="refine" in table,
+                                               n_state=n_state)  # fmt: skip
     return out
 
 
@@ -115,6 +127,7 @@ def cmd_basins(cfg: Any, args: Any) -> int:
             raise ConfigError(f"{cfg.source}: [integration].stop and [basins].stop disagree")
         c["stop"] = integ.pop("stop")
     edge = c.pop("edge", None)
+    manifold = c.pop("manifold", None)
     backend = args.backend or ("dask" if (args.scheduler or args.workers) else "local")
     res = basins(
         cfg.system, c.pop("grid"), out=args.output, threads=args.threads,
@@ -123,6 +136,12 @@ def cmd_basins(cfg: Any, args: Any) -> int:
     )  # fmt: skip
     if edge is not None:
         edge_check(res, **edge)
+    if manifold is not None:
+        from .basins_manifold import run_manifold
+
+        _, computed = run_manifold(res, manifold, c.get("refine"))
+        if not computed and not args.quiet:
+            print("manifold:  stored for the same settings; not recomputed")
     if not args.quiet:
         print(basins_report(args.output))
     return 0
@@ -160,22 +179,32 @@ def basins_report(path: Any) -> str:
         lines.append(f"boundary:  {len(bd.u)} segments refined to {bd.tol:g} "
                      f"({bd.n_pairs} boundary pairs, {bd.n_runs} runs)")  # fmt: skip
     if r.edge is not None:
-        e = r.edge
-        sm = e.summary
-        mu = ", ".join(f"{abs(z):.4g}" for z in e.saddle_multipliers[:3])
-        lines.append(
-            f"edge:      {len(e.u)} brackets followed: their two runs split after a median "
-            f"{sm['median_split_crossing']:g} crossings (t = {sm['median_t_split']:.4g})"
-        )
-        if e.saddle_period == 0:
-            lines.append("saddle:    no saddle orbit of the periods searched was found")
-            return "\n".join(lines)
-        lines.append(
-            f"saddle:    period {e.saddle_period} ({e.saddle_status}), |multipliers| {mu}; "
-            f"boundary runs: median closest approach {sm['boundary_median_min_distance']:.2e}, "
-            f"control runs: {sm['control_median_min_distance']:.2e}"
-        )
+        lines += _edge_lines(r.edge)
+    if r.manifold is not None:
+        from .basins_manifold import manifold_line
+
+        lines.append(manifold_line(r.manifold))
     return "\n".join(lines)
+
+
+def _edge_lines(e: Any) -> list[str]:
+    """The report's lines on the saddle check."""
+    lines = []
+    sm = e.summary
+    mu = ", ".join(f"{abs(z):.4g}" for z in e.saddle_multipliers[:3])
+    lines.append(
+        f"edge:      {len(e.u)} brackets followed: their two runs split after a median "
+        f"{sm['median_split_crossing']:g} crossings (t = {sm['median_t_split']:.4g})"
+    )
+    if e.saddle_period == 0:
+        lines.append("saddle:    no saddle orbit of the periods searched was found")
+        return lines
+    lines.append(
+        f"saddle:    period {e.saddle_period} ({e.saddle_status}), |multipliers| {mu}; "
+        f"boundary runs: median closest approach {sm['boundary_median_min_distance']:.2e}, "
+        f"control runs: {sm['control_median_min_distance']:.2e}"
+    )
+    return lines
 
 
 def is_basins_file(path: Any) -> bool:

@@ -172,7 +172,7 @@ def parse_config(data: dict[str, Any], source: str = "<dict>") -> RunConfig:
     if "basins" in data:
         from .basins import parse_basins_table
 
-        basins = parse_basins_table(data["basins"])
+        basins = parse_basins_table(data["basins"], n_state=system.n_state)
 
     title = data.get("title", "")
     notes = data.get("notes", "")
