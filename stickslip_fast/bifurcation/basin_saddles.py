@@ -87,6 +87,19 @@ def _distances(runs: list, saddle: np.ndarray, width: int) -> tuple:
     return dist, tmin
 
 
+def _crossings_of(system: Any, states: Any, t_end: float, kw: dict) -> list:
+    """Every recorded crossing of a run from each state, also of runs that settle to rest
+    (their approach is the edge tracking's signal; ``simulate`` returns points only for
+    status "ok")."""
+    from ..analysis.simulate import recorded_crossings
+
+    out = []
+    for y in states:
+        t, pts, _ = recorded_crossings(system, t_end, y, **kw)
+        out.append(SimpleNamespace(t_poincare=t, poincare=pts))
+    return out
+
+
 def edge_check(
     result: Any,
     *,
@@ -126,8 +139,6 @@ def edge_check(
     store : bool
         Write ``/basins/edge`` into the result's file.
     """
-    from ..analysis.simulate import recorded_crossings
-
     b = result.boundary
     if b is None:
         raise ValueError("result has no refined boundary; run refine_boundary first")
@@ -138,13 +149,7 @@ def edge_check(
     kw = dict(rtol=s["rtol"], atol=s["atol"], max_points=4096)
 
     def run(states):
-        # every recorded crossing, also of runs that settle to rest (their approach is
-        # the edge tracking's signal; simulate returns points only for status "ok")
-        out = []
-        for y in states:
-            t, pts, _ = recorded_crossings(result.system, t_end, y, **kw)
-            out.append(SimpleNamespace(t_poincare=t, poincare=pts))
-        return out
+        return _crossings_of(result.system, states, t_end, kw)
 
     runs = run(result.state_at(b.ua[pick]))
     runs_b = run(result.state_at(b.ub[pick]))

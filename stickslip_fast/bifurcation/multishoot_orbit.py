@@ -82,6 +82,27 @@ def product(factors: list[np.ndarray]) -> np.ndarray:
     return P
 
 
+def _what_converged(system: System, y0: np.ndarray, points: np.ndarray, period: int, tol: float):
+    """(status, message, period) of a converged solution: a rest point, an orbit of a
+    lower period, or an orbit crossing the section another number of times."""
+    p_found = points.shape[0]
+    speed = float(np.max(np.abs(_field(system, y0))))
+    q = _minimal_period(points, tol)
+    if speed < EQUILIBRIUM_SPEED:
+        msg = f"converged onto a rest point (max |f| = {speed:.2g}): use find_equilibrium"
+        return "equilibrium", msg, period
+    if q < p_found:
+        return (
+            "lower-period",
+            f"converged onto an orbit of period {q}, a divisor of {p_found}",
+            period,
+        )
+    if p_found != period:
+        msg = f"the orbit crosses the section {p_found} times per period, not {period}"
+        return "converged", msg, p_found
+    return "converged", "", period
+
+
 def find_orbit_multiple(
     system: System,
     z: np.ndarray,
@@ -142,19 +163,8 @@ def find_orbit_multiple(
         st, Y = ms.states_at(Y, T, (tc[k - 1] + ms.mesh[:-1] * T) % T, mesh=ms.mesh)
         Y[0][SECTION_INDEX] = 0.0
     mult = periodic_multipliers(factors)
-    p_found = points.shape[0]
     if status == "converged":
-        speed = float(np.max(np.abs(_field(system, Y[0]))))
-        q = _minimal_period(points, tol)
-        if speed < EQUILIBRIUM_SPEED:
-            status = "equilibrium"
-            message = f"converged onto a rest point (max |f| = {speed:.2g}): use find_equilibrium"
-        elif q < p_found:
-            status = "lower-period"
-            message = f"converged onto an orbit of period {q}, a divisor of {p_found}"
-        elif p_found != period:
-            message = f"the orbit crosses the section {p_found} times per period, not {period}"
-            period = p_found
+        status, message, period = _what_converged(system, Y[0], points, period, tol)
     converged = status == "converged"
     return Orbit(
         system=system, period=period, points=points, times=times, T=float(T),
