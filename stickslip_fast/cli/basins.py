@@ -42,19 +42,9 @@ _EDGE = {"n_tracks": int, "t_end": float, "near": float, "seed": int}
 
 
 def _sub(table: Any, name: str, types: dict) -> dict:
-    from .config_values import ConfigError
+    from .config_values import typed_table
 
-    if not isinstance(table, dict):
-        raise ConfigError(f"[basins.{name}] must be a table")
-    out = {}
-    for k, v in table.items():
-        if k not in types:
-            raise ConfigError(f"unknown key [basins.{name}].{k}; known: {sorted(types)}")
-        want = types[k]
-        if isinstance(v, bool) or not isinstance(v, (int, float) if want is float else int):
-            raise ConfigError(f"[basins.{name}].{k} must be {want.__name__}, got {v!r}")
-        out[k] = want(v)
-    return out
+    return typed_table(table, f"basins.{name}", types)
 
 
 def parse_basins_table(table: dict[str, Any], n_state: int | None = None) -> dict[str, Any]:

@@ -59,15 +59,12 @@ def _number(value: Any, want: type, key: str) -> Any:
 
 
 def _scan_table(table: Any) -> dict:
-    from .config_values import ConfigError
+    from .config_values import ConfigError, typed_table
 
     if not isinstance(table, dict):
         raise ConfigError(f"[basins.manifold].scan must be a table, got {table!r}")
-    unknown = sorted(set(table) - set(_SCAN))
-    if unknown:
-        raise ConfigError(f"unknown key [basins.manifold.scan].{unknown[0]}; known: "
-                          f"{sorted(_SCAN)}")  # fmt: skip
-    out = {k: _number(v, _SCAN[k], f"[basins.manifold.scan].{k}") for k, v in table.items()}
+    checked = typed_table(table, "basins.manifold.scan", _SCAN)
+    out = {k: _number(v, _SCAN[k], f"[basins.manifold.scan].{k}") for k, v in checked.items()}
     if out.get("grid", 2) < 2:
         raise ConfigError(f"[basins.manifold.scan].grid must be >= 2, got {out['grid']}")
     return {**_SCAN_DEFAULTS, **out}

@@ -12,11 +12,27 @@ import numpy as np
 
 from ..base.messages import plain
 
-__all__ = ["ConfigError"]
+__all__ = ["ConfigError", "typed_table"]
 
 
 class ConfigError(ValueError):
     """A configuration file has an unknown key or a bad value (the message names it)."""
+
+
+def typed_table(table: Any, name: str, types: dict) -> dict:
+    """A TOML sub-table ``[name]`` checked against ``types`` (key -> int or float): its
+    values converted, or a ConfigError naming an unknown key or a value of a wrong type."""
+    if not isinstance(table, dict):
+        raise ConfigError(f"[{name}] must be a table")
+    out = {}
+    for k, v in table.items():
+        if k not in types:
+            raise ConfigError(f"unknown key [{name}].{k}; known: {sorted(types)}")
+        want = types[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float) if want is float else int):
+            raise ConfigError(f"[{name}].{k} must be {want.__name__}, got {v!r}")
+        out[k] = want(v)
+    return out
 
 
 def _values_from_spec(spec: Any, key: str) -> np.ndarray:
