@@ -14,11 +14,11 @@ from collections import namedtuple
 
 import numpy as np
 import pytest
-from numba import njit
+from numba import njit, types
 from numba.core.errors import TypingError
 from numba.extending import overload
 
-from stickslip_fast.base.jit import OVERLOAD, borrow
+from stickslip_fast.base.jit import OVERLOAD, borrow, overload_call
 from stickslip_fast.core.driver import PoincareObserver, Section
 
 Rec = namedtuple("Rec", ["a", "k", "flag", "m", "inner"])
@@ -109,3 +109,64 @@ def test_poll_flag_reads_the_first_entry_of_an_integer_flag():
     assert read(np.zeros(1, dtype=np.int64)) == 0
     with pytest.raises(TypingError):
         read(np.zeros(1))  # a float array is not a flag
+
+
+# ------------------------------------------------------------ jit.overload_call
+def _scale_into(rec, factor, label):  # noqa: ARG001 - resolved by overload
+    pass
+
+
+@overload_call(_scale_into)
+def _scale_into_impl(rec, factor, label):
+    if isinstance(label, types.UnicodeType):  # not borrowable: passed as it is
+
+        def impl(rec, factor, label):
+            for i in range(rec.a.size):
+                rec.a[i] *= factor
+            rec.m[0, 0] = len(label)
+            return rec.a.sum()
+
+        return impl
+
+
+@njit
+def _local_record_scaled(n):
+    # the record is a call's result and is written only inside the overload_call
+    # function: the writes must survive Numba's dead-code elimination
+    rec = Rec(np.ones(n), 0, False, np.zeros((2, 2)), Inner(0, True))
+    total = _scale_into(rec, 3.0, "four")
+    return total, rec.a.copy(), rec.m[0, 0]
+
+
+def test_overload_call_writes_reach_the_caller():
+    total, a, m00 = _local_record_scaled(5)
+    assert total == 15.0
+    assert np.array_equal(a, np.full(5, 3.0))
+    assert m00 == 4.0
+
+
+def test_a_refused_run_reports_counts_and_times_not_garbage():
+    # integrate() on parameters it refuses (a NaN): status "error", no steps, no
+    # crossings and a finite motion measure. The refusal writes into the observer
+    # record that integrate() made; inlining _run at the Numba IR level once
+    # lost those writes (the motion measure came back as 9.9e203).
+    import stickslip_fast as ssf
+    from stickslip_fast.base.status import ST_ERROR
+    from stickslip_fast.core import trajectory
+
+    m = trajectory.M_RODAS5P
+    p = ssf.System.preset("asymmetric").to_array()
+    p[0] = np.nan
+    stat_i = np.full(4, 7, dtype=np.int64)
+    stat_f = np.full(4, 7.0)
+    y_end = np.full(4, 7.0)
+    status = trajectory.integrate(
+        m, np.zeros(4), p, 1, False, trajectory.method_variant(m, 1, False),
+        trajectory.run_settings(100.0, 0.0, 1e-6, 1e-8), np.full((4, 4), 7.0), np.full(4, 7.0),
+        np.empty((0, 4)), 1.0, y_end, stat_i, stat_f, np.zeros(1, dtype=np.int64),
+    )  # fmt: skip
+    assert status == ST_ERROR
+    assert np.array_equal(stat_i, np.zeros(4, dtype=np.int64))
+    assert stat_f[trajectory.F_T_FINAL] == 0.0
+    assert stat_f[trajectory.F_AMPLITUDE] == 0.0
+    assert np.isnan(stat_f[trajectory.F_T_CONVERGED])

@@ -34,7 +34,7 @@ class Listener(event.Listener):
 
     def on_end(self, ev):
         d = ev.data["dispatcher"]
-        compiled.append([d.py_func.__module__, d.py_func.__qualname__, str(ev.data["args"])])
+        compiled.append([str(d.py_func.__module__), d.py_func.__qualname__, str(ev.data["args"])])
 
 
 event.register("numba:compile", Listener())
@@ -77,11 +77,17 @@ def test_first_simulate_compiles_one_method_family(tmp_path):
     assert rec["status"] == "no-crossings" and rec["n_steps"] > 0
     compiled = rec["compiled"]
     assert compiled, "nothing compiled: the cache folder was not empty"
-    # one specialisation of the trajectory kernel and of the driver: the explicit family
+    # one specialisation of the trajectory kernel, of the driver and of the method's
+    # step (compiled once as a function of its own: jit.overload_call)
     assert rec["integrate"] == 1
     assert rec["drive"] == 1
     drives = [args for mod, name, args in compiled if name == "drive"]
     assert len(drives) == 1 and drives[0].startswith("(ExplicitRKMethod(")
+    steps = [args for mod, name, args in compiled if name == "stepper_step"]
+    assert len(steps) == 1 and steps[0].startswith("(ExplicitRKMethod(")
+    assert [mod for mod, name, _ in compiled if name == "stepper_step"] == [
+        "stickslip_fast.core.steppers"
+    ]
     # none of the Rosenbrock machinery (stages, Jacobian, factorisation) was compiled
     rosenbrock = [(name, args[:80]) for _, name, args in compiled if "RosenbrockMethod" in args]
     assert rosenbrock == []

@@ -26,10 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
-from numba.extending import overload
 
 from ..base.interrupt import call_interruptible, new_abort_flag
-from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.jit import JIT, is_record, overload_call
 from ..base.messages import plain
 from ..base.status import ST_ERROR, STATUS_NAMES
 from ..core.driver import (
@@ -54,7 +53,6 @@ from ..model.system import System
 __all__ = ["LyapunovResult", "LyapunovObserver", "largest_lyapunov", "lyapunov_kernel"]
 
 _JIT = JIT
-_OVL = OVERLOAD
 
 # renormalise early (without recording) when |u| leaves [1/_BIG, _BIG]
 _BIG = 1e100
@@ -82,7 +80,7 @@ def _norm(u: np.ndarray) -> float:
     return math.sqrt(acc)
 
 
-@overload(observe_start, **_OVL)
+@overload_call(observe_start)
 def _lyap_start(obs, y):
     if _is(obs, LyapunovObserver):
 
@@ -104,7 +102,7 @@ def _lyap_start(obs, y):
         return impl
 
 
-@overload(observe_step, **_OVL)
+@overload_call(observe_step)
 def _lyap_step(obs, method, ws, t0, h, y0, y1):
     if _is(obs, LyapunovObserver):
 
@@ -141,7 +139,7 @@ def _lyap_step(obs, method, ws, t0, h, y0, y1):
         return impl
 
 
-@overload(stop_now, **_OVL)
+@overload_call(stop_now)
 def _lyap_stop(stop, obs, t, y):
     if _is(stop, StopRule) and _is(obs, LyapunovObserver):
         return lambda stop, obs, t, y: False

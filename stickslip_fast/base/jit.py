@@ -6,19 +6,24 @@ raising: no kernel can raise (see docs/developing.md, "The kernel rules").
 
 from __future__ import annotations
 
-from numba import types
-from numba.core import cgutils, ir_utils
-from numba.extending import intrinsic
+import functools
+import inspect
 
-__all__ = ["JIT", "OVERLOAD", "is_record", "borrow", "poll_flag"]
+from numba import njit, types
+from numba.core import cgutils, ir_utils
+from numba.extending import intrinsic, overload
+
+__all__ = ["JIT", "OVERLOAD", "overload_call", "is_record", "borrow", "poll_flag"]
 
 #: Options of every ``@njit`` of the package.
 JIT = dict(cache=True, nogil=True, error_model="numpy")
-#: Options of every ``@overload`` implementation. Inlined into the caller at
+#: Options of the small ``@overload`` implementations (the problem's right-hand
+#: side, Jacobian, factorisation, solve, norms). Inlined into the caller at
 #: Numba IR level: records (namedtuples of arrays) passed across a call boundary
 #: cost an atomic incref/decref per array field, which made a step of the generic
 #: driver ~1.5x slower than the hand-written loop it replaced; inlined, the
-#: reference counts are pruned and the step costs what it did.
+#: reference counts are pruned and the step costs what it did. The large ones
+#: use :func:`overload_call` instead.
 OVERLOAD = dict(jit_options=JIT, inline="always")
 
 
@@ -117,3 +122,57 @@ def poll_flag(typingctx, flag):  # noqa: ARG001 - the intrinsic's typing signatu
         return builder.load_atomic(ary.data, "monotonic", signature.return_type.bitwidth // 8)
 
     return sig, codegen
+
+
+# ---------------------------------------------------------- overloads behind a call
+def _borrowing_call(name: str, impl, arg_types):
+    """``impl`` (an overload implementation) inside a function that borrows its arguments.
+
+    The function is named ``name`` (so that compile events and profiles say what
+    it is) and calls ``impl``, inlined at the Numba IR level, with every argument
+    whose type :func:`borrow` takes replaced by its borrowed value.
+    """
+    inner = njit(inline="always", **JIT)(impl)
+    names = list(inspect.signature(impl).parameters)
+    passed = [f"borrow({a})" if _borrowable(t) else a for a, t in zip(names, arg_types)]
+    source = f"def {name}({', '.join(names)}):\n    return inner({', '.join(passed)})\n"
+    scope = {"inner": inner, "borrow": borrow}
+    exec(source, scope)  # noqa: S102 - a fixed template over the implementation's own arguments
+    called = scope[name]
+    called.__module__ = impl.__module__
+    return called
+
+
+def overload_call(func):
+    """``@overload(func)`` compiled once per type as a function of its own, then inlined by LLVM.
+
+    For the large generic operations the driver calls at every step: a method's
+    step, its initialisation, acceptance and dense output, an observer, a stop
+    rule. Inlined at the Numba IR level (``inline="always"``), Numba deep-copies
+    and re-types their IR into every caller, and that was most of a first run's
+    compile (the driver alone: 48 of 78 s of CPU). Here Numba types and lowers
+    each implementation once; the compiled function carries LLVM's
+    ``alwaysinline`` (Numba's ``forceinline``), so LLVM inlines it into the step
+    loop and the step costs what it did inlined. Its arguments are borrowed on
+    entry (:func:`borrow`): after LLVM's inlining their arrays' reference counts
+    are null constants and the count calls go away.
+
+    The implementation must not return or store its record arguments (borrowed
+    values do not outlive the call).
+    """
+
+    def decorate(generator):
+        @functools.wraps(generator)
+        def typed(*args, **kws):
+            impl = generator(*args, **kws)
+            if impl is None:
+                return None
+            return _borrowing_call(func.__name__, impl, args)
+
+        # cache=False: the generated function has no source file; the compiled
+        # kernels that call it are cached with its code linked in.
+        options = dict(JIT, cache=False, forceinline=True)
+        overload(func, jit_options=options, inline="never")(typed)
+        return generator
+
+    return decorate

@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.jit import JIT, OVERLOAD, is_record, overload_call
 from .problems import problem_f, problem_jac
 from .steppers import (
     DENSE_HERMITE,
@@ -227,7 +227,7 @@ def _switch_mode(ist, mode, count_slot) -> None:
     ist[A_N_CALM] = 0
 
 
-@overload(stepper_init, **_OVL)
+@overload_call(stepper_init)
 def _auto_init(method, prob, lin, y, ws):
     if _is(method, AutoMethod):
 
@@ -243,7 +243,7 @@ def _auto_init(method, prob, lin, y, ws):
         return impl
 
 
-@overload(stepper_step, **_OVL)
+@overload_call(stepper_step)
 def _auto_step(method, prob, lin, y, h, ws):
     if _is(method, AutoMethod):
 
@@ -267,7 +267,7 @@ def _auto_step(method, prob, lin, y, h, ws):
         return impl
 
 
-@overload(stepper_accept, **_OVL)
+@overload_call(stepper_accept)
 def _auto_accept(method, prob, lin, y, ws, modified):
     if _is(method, AutoMethod):
 
@@ -342,7 +342,7 @@ def _erk_dense_hermite(P, K, h, D) -> None:
             D[r - 1, i] = acc
 
 
-@overload(stepper_dense, **_OVL)
+@overload_call(stepper_dense)
 def _auto_dense(method, ws, h):
     if _is(method, AutoMethod):
 

@@ -33,9 +33,8 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
-from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, borrow, is_record, poll_flag
+from ..base.jit import JIT, borrow, is_record, overload_call, poll_flag
 from ..base.status import (
     ST_INTERRUPTED,
     ST_MAX_STEPS,
@@ -96,7 +95,6 @@ __all__ = [
 ]
 
 _JIT = JIT
-_OVL = OVERLOAD
 
 OBS_MODIFIED = 1
 OBS_FAIL = 2
@@ -181,7 +179,7 @@ def observe_step(obs, method, ws, t0, h, y0, y1):  # noqa: ARG001
     """Called after each accepted step; returns OBS_* flags."""
 
 
-@overload(observe_start, **_OVL)
+@overload_call(observe_start)
 def _poincare_start(obs, y):
     if _is(obs, PoincareObserver):
 
@@ -204,7 +202,7 @@ def _poincare_start(obs, y):
         return impl
 
 
-@overload(observe_step, **_OVL)
+@overload_call(observe_step)
 def _poincare_step(obs, method, ws, t0, h, y0, y1):
     if _is(obs, PoincareObserver):
 
@@ -254,7 +252,7 @@ def _poincare_step(obs, method, ws, t0, h, y0, y1):
         return impl
 
 
-@overload(stop_now, **_OVL)
+@overload_call(stop_now)
 def _stop_now(stop, obs, t, y):
     if _is(stop, StopRule) and _is(obs, PoincareObserver):
 
@@ -288,8 +286,8 @@ def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) 
     ST_OK (reached t_end or the stop rule fired), ST_MAX_STEPS, ST_UNDERFLOW,
     ST_NONFINITE or ST_INTERRUPTED.
     """
-    # Borrowed records: the step loop below copies them into every inlined call,
-    # and each copy of a counted array costs an atomic instruction (jit.borrow).
+    # Borrowed records: the step loop below passes them to every call, and each
+    # copy of a counted array costs an atomic instruction (jit.borrow).
     method = borrow(method)
     prob = borrow(prob)
     lin = borrow(lin)

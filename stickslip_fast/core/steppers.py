@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.jit import JIT, OVERLOAD, is_record, overload_call
 from .problems import (
     error_norm,
     initial_step,
@@ -216,7 +216,7 @@ def erk_step(A, b, b_err, prob, y0, h, K, ytmp, y1, err) -> None:
         err[i] = h * e
 
 
-@overload(stepper_init, **_OVL)
+@overload_call(stepper_init)
 def _erk_init(method, prob, lin, y, ws):
     if _is(method, ExplicitRKMethod):
 
@@ -235,7 +235,7 @@ def _erk_init(method, prob, lin, y, ws):
         return impl
 
 
-@overload(stepper_step, **_OVL)
+@overload_call(stepper_step)
 def _step(method, prob, lin, y, h, ws):
     if _is(method, ExplicitRKMethod):
 
@@ -258,7 +258,7 @@ def _step(method, prob, lin, y, h, ws):
         return impl
 
 
-@overload(stepper_accept, **_OVL)
+@overload_call(stepper_accept)
 def _accept(method, prob, lin, y, ws, modified):
     if _is(method, ExplicitRKMethod):
 
@@ -292,7 +292,7 @@ def _stage_combination(M, K, scale, D) -> None:
             D[r, i] = scale * acc
 
 
-@overload(stepper_dense, **_OVL)
+@overload_call(stepper_dense)
 def _dense(method, ws, h):
     if _is(method, ExplicitRKMethod):
         return lambda method, ws, h: _stage_combination(method.P, ws.K, h, ws.D)

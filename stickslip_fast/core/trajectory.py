@@ -282,6 +282,9 @@ def _variant_matches_impl(variant, n_osc, dc):
     return lambda variant, n_osc, dc: n_osc == v_osc and dc == v_dc
 
 
+# A compiled function, not inlined: it writes into the observer record that its
+# callers get from a call, and stores into such a record from IR-inlined code
+# are removed as dead (docs/developing.md, "Borrowed records").
 @njit(**_JIT)
 def _run(
     method, y0, p, n_osc, dc, variant, rs, p_buf, lin, ws, obs, stop, y, istat, fstat, abort
