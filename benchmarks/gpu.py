@@ -18,9 +18,11 @@ It measures, in one run:
 
 and reports trajectories per second, registers and local memory per thread,
 theoretical occupancy (from registers, block size and the device's limits),
-the effect of divergence (per block, the slowest thread's Rodas5P steps
-against the median thread's: threads of a block run in lock step, so the block
-lasts as long as its slowest thread), a block-size scan, and whether the GPU's
+the spread of run lengths (per 64 consecutive runs, the slowest run's Rodas5P
+steps against the median run's, and the lock-step efficiency these runs would
+have with one run per thread, as the kernels ran before their queue of runs:
+since then a thread whose run ends takes the next, so the spread costs less than
+this says), a block-size scan, and whether the GPU's
 status and period equal the CPU's on the subsample (and how far the points are).
 
 A workload stops submitting launches after ``--budget-s`` seconds of GPU time
@@ -385,8 +387,8 @@ def markdown(res: dict) -> str:
         f"({res['machine']['cores']} threads)  |  {res['when']}",
         "",
         "| workload | stop | runs (GPU) | GPU runs/s | CPU runs/s (all cores) | CPU runs/s (2 cores) "
-        "| × all cores | × 2 cores | slowest/median steps per block (median, p90) "
-        "| lock-step efficiency | agreement (status, period, points ≤ 1e-9) |",
+        "| × all cores | × 2 cores | slowest/median steps per 64 runs (median, p90) "
+        "| lock-step efficiency, one run per thread | agreement (status, period, points ≤ 1e-9) |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for w in res["workloads"]:

@@ -169,6 +169,36 @@ def test_failed_runs_match_cpu():
     assert list(cpu.status) == ["max-steps", "ok"]
 
 
+def test_threads_take_runs_from_the_queue(monkeypatch):
+    # Fewer threads than runs: each thread takes run after run from the launch's queue,
+    # across runs that end differently (an orbit, rest, max-steps, a non-finite start:
+    # "error"). Every output equals that of one thread per run, bit for bit, and the
+    # CPU's status and period.
+    from stickslip_fast.backends.local import compute_restart_chunk
+    from stickslip_fast.core.settings import Settings
+
+    settings = Settings(t_end=40.0, t_transient=10.0, max_points=4, max_steps=1000)
+    eta = np.array([[2.0], [5.0], [9.99], [5.0], [4.0]])
+    y0 = np.tile(ASYM.initial_state(None), (5, 1))
+    y0[3, 1] = np.nan
+    outs = []
+    for threads in (2, 5):  # 2: a queue of 5 runs; 5: one run per thread
+        monkeypatch.setattr(cuda_backend, "SIMULATOR_THREADS", threads)
+        outs.append(cuda_backend.compute_restart_chunk_cuda(ASYM, ("eta",), eta, y0, settings))
+    two, five = outs
+    assert set(two) == set(five)
+    for key in two:
+        np.testing.assert_array_equal(two[key], five[key], err_msg=key)
+    cpu = compute_restart_chunk(ASYM, ("eta",), eta, y0, settings)
+    for key in ("status", "period", "count", "n_steps", "n_rejected", "n_crossings"):
+        np.testing.assert_array_equal(two[key], cpu[key], err_msg=key)
+    np.testing.assert_allclose(two["points"], cpu["points"], rtol=0, atol=POINT_TOL)
+    from stickslip_fast.base.status import STATUS_NAMES
+
+    names = [STATUS_NAMES[c] for c in two["status"]]
+    assert "error" in names and "max-steps" in names and "ok" in names
+
+
 def test_2d_map_to_file_resumes_and_is_never_mixed_with_cpu(tmp_path):
     out = tmp_path / "map.h5"
     axes = (np.array([2.0, 6.0]), np.array([-0.3, 0.2]))

@@ -1,6 +1,6 @@
 """CUDA backend for :func:`stickslip_fast.sweep` and :func:`stickslip_fast.census`.
 
-One GPU thread per trajectory; the kernels are in :mod:`stickslip_fast.backends.cuda_kernels`,
+Each GPU thread integrates trajectories one after another, taken from a queue; the kernels are in :mod:`stickslip_fast.backends.cuda_kernels`,
 this module schedules their launches. Imported only when ``backend="cuda"`` is
 asked for (the optional ``[cuda]`` extra, numba-cuda); nothing else in the
 package imports CUDA.
@@ -55,6 +55,7 @@ __all__ = [
     "cuda_runner",
     "default_chunk_size",
     "device_summary",
+    "max_threads",
     "get_kernel",
     "kernel_signature",
     "simulator_enabled",
@@ -69,6 +70,14 @@ CHUNK_BYTES = 1 << 29
 MAX_IN_FLIGHT = 6
 #: Threads per block (results do not depend on it); see docs/gpu.md.
 THREADS_PER_BLOCK = 64
+#: Threads per multiprocessor a launch starts, at most: about what the kernel's
+#: ~200 registers per thread leave resident (results do not depend on it).
+THREADS_PER_SM = 384
+#: Runs per thread in a launch of the default size: a thread whose run ends takes
+#: the next one from the launch's queue (results do not depend on it).
+RUNS_PER_THREAD = 4
+#: Threads a launch starts, at most, in numba's simulator (so tests exercise the queue).
+SIMULATOR_THREADS = 8
 
 
 # ------------------------------------------------------------------ launches
@@ -88,11 +97,13 @@ def _rows_with_etap(rows: np.ndarray) -> np.ndarray:
 class _Launch:
     """One kernel launch in flight on its own stream, with its outputs on the device.
 
-    ``y0`` is one start (n,) for every value or one per value (L, n).
+    ``y0`` is one start (n,) for every value or one per value (L, n). The launch
+    starts ``min(L, max_threads(threads_per_sm))`` threads (rounded up to whole
+    blocks), which take the L runs from a queue (an atomic counter on the device).
     """
 
     def __init__(self, system, rows, y0, settings, max_period, threads_per_block,
-                 max_registers=None):  # fmt: skip
+                 max_registers=None, threads_per_sm=None):  # fmt: skip
         from ..core.trajectory import SWEEP_INT_FIELDS
 
         kernel = get_kernel(system.n_oscillators, system.is_dc_motor, max_registers)
@@ -114,7 +125,10 @@ class _Launch:
             cuda.device_array(nv, np.float64, stream=s),
             cuda.device_array((nv, n), np.float64, stream=s),
         )
-        blocks = max(1, (nv + threads_per_block - 1) // threads_per_block)
+        self.d_queue = cuda.to_device(np.zeros(1, np.int64), stream=s)
+        threads = min(nv, max_threads(threads_per_sm))
+        threads_per_block = max(1, min(threads_per_block, threads))
+        blocks = max(1, (threads + threads_per_block - 1) // threads_per_block)
         with warnings.catch_warnings():  # small launches are fine: no occupancy warning
             # (numba-cuda raises its own copy of NumbaPerformanceWarning: match the text)
             warnings.filterwarnings("ignore", message=r"(?s).*Grid size \d+ will likely")
@@ -131,7 +145,7 @@ class _Launch:
             float(settings.rtol), float(settings.atol), float(settings.h),
             int(settings.max_steps), float(settings.equilibrium_tol),
             float(settings.period_tol), int(max_period), converged, float(settings.dwell),
-            *self.d_out,
+            *self.d_out, self.d_queue,
         )  # fmt: skip
 
     def done(self) -> bool:
@@ -147,6 +161,7 @@ class _Launch:
 def compute_restart_chunk_cuda(
     system, names, values: np.ndarray, y0: np.ndarray, settings: dict,
     threads_per_block: int = THREADS_PER_BLOCK, max_registers: int | None = None,
+    threads_per_sm: int | None = None,
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """Restart mode on the GPU: the contract of :func:`stickslip_fast.backends.local.compute_restart_chunk`.
 
@@ -165,6 +180,9 @@ def compute_restart_chunk_cuda(
         CUDA block size; results do not depend on it.
     max_registers : int, optional
         Register cap per thread (see :func:`get_kernel`); results do not depend on it.
+    threads_per_sm : int, optional
+        Threads started per multiprocessor, at most (default THREADS_PER_SM); each
+        takes runs from the launch's queue. Results do not depend on it.
 
     Returns
     -------
@@ -179,7 +197,8 @@ def compute_restart_chunk_cuda(
     check_available()
     _check_supported(system, settings)
     rows = _param_rows(system, names, np.asarray(values, dtype=float))
-    launch = _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block, max_registers)
+    launch = _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block, max_registers,
+                     threads_per_sm)  # fmt: skip
     return _pack(launch.result(), settings)
 
 
@@ -213,6 +232,7 @@ def _single_value_chains(unit) -> bool:
 def cuda_runner(
     system, settings: dict, mode: str, threads_per_block: int = THREADS_PER_BLOCK,
     max_in_flight: int = MAX_IN_FLIGHT, max_registers: int | None = None,
+    threads_per_sm: int | None = None,
 ):  # fmt: skip
     """The runner for ``sweep(backend="cuda")``: the contract of :func:`chunks.run_local`.
 
@@ -231,6 +251,8 @@ def cuda_runner(
         As for the sweep.
     mode : {"restart", "continuation", "census"}
         "census": continuation units of one-value chains, each from its own start.
+    threads_per_block, max_in_flight, max_registers, threads_per_sm
+        Launch shape (see :func:`compute_restart_chunk_cuda`); results do not depend on them.
 
     Raises
     ------
@@ -257,7 +279,8 @@ def cuda_runner(
         if unit.kind != "restart":  # one-value chains, each from its own start
             values, y0 = values[:, 0, :], unit.y_starts
         rows = _param_rows(system, names, values)
-        return _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block, max_registers)
+        return _Launch(system, rows, y0, settings, MAX_PERIOD, threads_per_block, max_registers,
+                       threads_per_sm)  # fmt: skip
 
     def finish(unit, lau):
         res = _pack(lau.result(), settings)
@@ -296,19 +319,28 @@ def _pop_first_done(in_flight: list, finish) -> tuple:
         time.sleep(0.001)
 
 
-def default_chunk_size(system, settings: dict) -> int:
-    """Values per launch: about the threads the GPU keeps resident, within CHUNK_BYTES.
+def max_threads(threads_per_sm: int | None = None) -> int:
+    """Threads one launch starts, at most: ``threads_per_sm`` (default THREADS_PER_SM)
+    per multiprocessor of the current GPU; SIMULATOR_THREADS in the simulator."""
+    if simulator_enabled():
+        return SIMULATOR_THREADS
+    per_sm = THREADS_PER_SM if threads_per_sm is None else int(threads_per_sm)
+    return max(1, per_sm) * int(cuda.get_current_device().MULTIPROCESSOR_COUNT)
 
-    256 per multiprocessor (the kernel's ~190 registers per thread leave room
-    for ~320 resident threads per multiprocessor), so that with
-    MAX_IN_FLIGHT launches queued the GPU stays full while a launch waits for
-    its slowest thread; at most what fits in CHUNK_BYTES of outputs; 64 in the
-    simulator. Results do not depend on it.
+
+def default_chunk_size(system, settings: dict) -> int:
+    """Values per launch: RUNS_PER_THREAD runs for each thread a launch starts.
+
+    A launch starts about the threads the GPU keeps resident (:func:`max_threads`)
+    and each takes runs from the launch's queue until it is empty, so a thread
+    whose run ends early does not idle while its warp's other runs go on; with
+    MAX_IN_FLIGHT launches queued, the next launch's blocks fill the
+    multiprocessors that the last runs of a launch leave. At most what fits in
+    CHUNK_BYTES of outputs; 64 in the simulator. Results do not depend on it.
     """
     if simulator_enabled():
         return 64
-    dev = cuda.get_current_device()
-    fill = 256 * int(dev.MULTIPROCESSOR_COUNT)
+    fill = RUNS_PER_THREAD * max_threads()
     per_value = 8 * ((settings.max_points + 1) * (system.n_state + 1) + 6)
     return int(max(1024, min(DEFAULT_CHUNK_SIZE, fill, CHUNK_BYTES // per_value)))
 
@@ -334,7 +366,7 @@ def kernel_signature():
     a1, a2, a3, i2 = float64[::1], float64[:, ::1], float64[:, :, ::1], int64[:, ::1]
     f, i = float64, int64
     b = types.boolean
-    return (a2, a2, f, f, f, f, f, i, f, f, i, b, f, a3, a2, i2, a1, a2)
+    return (a2, a2, f, f, f, f, f, i, f, f, i, b, f, a3, a2, i2, a1, a2, int64[::1])
 
 
 def compile_ptx(n_osc: int, dc: bool, cc: tuple[int, int] = (9, 0)) -> str:

@@ -238,3 +238,44 @@ def _reverse_rows(pts, tpts, lo, hi):
         tpts[hi] = tt
         lo += 1
         hi -= 1
+
+
+@cuda.jit(device=True)
+def _time_order(pts, tpts, n_cross):
+    """Unroll a ring of crossings into time order: rotate left by ``n_cross % cap``."""
+    cap = pts.shape[0]
+    if cap > 0 and n_cross > cap:
+        start = n_cross % cap
+        if start > 0:
+            _reverse_rows(pts, tpts, 0, start)
+            _reverse_rows(pts, tpts, start, cap)
+            _reverse_rows(pts, tpts, 0, cap)
+
+
+@cuda.jit(device=True)
+def _nan_rows(pts, tpts, start):
+    """Rows ``start`` .. of a run's points and times: NaN (no point there)."""
+    for k in range(start, pts.shape[0]):
+        tpts[k] = math.nan
+        for i in range(pts.shape[1]):
+            pts[k, i] = math.nan
+
+
+@cuda.jit(device=True)
+def _write_counts(ints, v, count, period, status, n_steps, n_rej, n_cross):
+    """Row ``v`` of the integer outputs, in the order of ``SWEEP_INT_FIELDS``."""
+    ints[v, 0] = count
+    ints[v, 1] = period
+    ints[v, 2] = status
+    ints[v, 3] = n_steps
+    ints[v, 4] = n_rej
+    ints[v, 5] = n_cross
+
+
+@cuda.jit(device=True)
+def _disks_at_rest(y, n_osc, tol):
+    """Every disk's speeds (x-dot, phi-dot) within ``tol``, as ``stoprules`` judges rest."""
+    for i in range(n_osc):
+        if not (abs(y[4 * i + 1]) <= tol and abs(y[4 * i + 3]) <= tol):
+            return False
+    return True

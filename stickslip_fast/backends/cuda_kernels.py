@@ -1,4 +1,4 @@
-"""The CUDA kernels of the GPU backend: one thread integrates one trajectory.
+"""The CUDA kernels of the GPU backend: each thread integrates trajectories one after another.
 
 Imported only through :mod:`stickslip_fast.backends.cuda` (which schedules the
 launches), and only when ``backend="cuda"`` is asked for: nothing else in the
@@ -6,7 +6,10 @@ package imports CUDA.
 
 What runs on the device
 -----------------------
-One thread integrates one value from its start with Rodas5P (coefficients
+A thread takes runs (one value from its start) from an atomic counter, one after the
+other, and advances its current run by one step per pass of its loop; so a warp's
+lanes keep stepping together while their runs differ in length. Each run is
+integrated with Rodas5P (coefficients
 from :data:`stickslip_fast.core.tableaus.RODAS5P`, frozen into the kernel as
 constant data), the analytic Jacobian and the bordered O(N) linear solve, the
 same PI step-size controller as the CPU kernel, an inline Poincare detector
@@ -52,10 +55,13 @@ from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
     _ST_OK,
     _ST_UNDERFLOW,
     _dense_value,
+    _disks_at_rest,
     _error_norm,
     _initial_step,
     _locate_upcrossing,
-    _reverse_rows,
+    _nan_rows,
+    _time_order,
+    _write_counts,
     check_available,
     classify,
     cuda,
@@ -70,12 +76,7 @@ from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
     w_solve,
 )
 
-__all__ = [
-    "MAX_OSCILLATORS",
-    "check_available",
-    "get_kernel",
-    "simulator_enabled",
-]
+__all__ = ["MAX_OSCILLATORS", "check_available", "get_kernel", "simulator_enabled"]
 
 
 #: Largest chain the kernels are specialised for; larger N runs on the CPU.
@@ -84,46 +85,17 @@ MAX_OSCILLATORS = 4
 
 # Rodas5P as data: numba freezes module-level arrays into the kernel as constants.
 _GAMMA = float(RODAS5P.gamma)
-
-
 _A = np.ascontiguousarray(RODAS5P.a, dtype=np.float64)
-
-
 _C = np.ascontiguousarray(RODAS5P.C, dtype=np.float64)
-
-
 _B = np.ascontiguousarray(RODAS5P.b, dtype=np.float64)
-
-
 _E = np.ascontiguousarray(RODAS5P.b_err, dtype=np.float64)
-
-
 _H = np.ascontiguousarray(RODAS5P.H, dtype=np.float64)
-
-
 _Q = RODAS5P.embedded_order + 1.0
-
-
 _STAGES = int(_B.size)
-
-
 _NDENSE = int(_H.shape[0])
-
-
 # PI step-size controller: the CPU kernel's constants
-_SAFETY = STEP_SAFETY
-
-
-_FAC_MIN = STEP_FAC_MIN
-
-
-_FAC_MAX = STEP_FAC_MAX
-
-
-_PI_ALPHA = PI_ALPHA
-
-
-_PI_BETA = PI_BETA
+_SAFETY, _FAC_MIN, _FAC_MAX = STEP_SAFETY, STEP_FAC_MIN, STEP_FAC_MAX
+_PI_ALPHA, _PI_BETA = PI_ALPHA, PI_BETA
 
 
 # ------------------------------------------------------------------- kernels
@@ -149,8 +121,10 @@ def get_kernel(n_osc: int, dc: bool, max_registers: int | None = None):
     numba CUDA dispatcher
         ``kernel[blocks, threads](y0, params, t_end, t_transient, rtol, atol,
         h_fixed, max_steps, equilibrium_tol, period_tol, max_period, converged,
-        dwell, points, t_points, ints, t_conv, final_state)``: one thread per row
-        of ``params``, starting from row ``v`` of ``y0`` (or its only row); the
+        dwell, points, t_points, ints, t_conv, final_state, queue)``: one run per
+        row ``v`` of ``params``, from row ``v`` of ``y0`` (or its only row), taken
+        by the threads from ``queue`` (an int64 device array holding 0): any
+        number of threads does all the runs, with the same results; the
         outputs have the layout of :func:`stickslip_fast.core.sweep_kernels.sweep_chunk`.
         ``converged`` selects the converged stop rule (then pass
         ``t_transient = 0``, as the CPU kernel records from t = 0).
@@ -177,22 +151,17 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
     MIN_POINTS = CONVERGED_MIN_POINTS
     jit = cuda.jit if max_registers is None else cuda.jit(max_registers=max_registers)
 
+    # One function on purpose: a kernel's per-thread state lives in its registers and
+    # local arrays, which device functions could only share through more local memory.
     @jit
     def sweep_kernel(
         y0, params, t_end, t_transient, rtol, atol, h_fixed, max_steps, equilibrium_tol,
         period_tol, max_period, converged, dwell, points, t_points, ints, t_conv, final_state,
+        queue,
     ):  # fmt: skip
-        v = cuda.grid(1)
-        if v >= params.shape[0]:
+        n_runs = params.shape[0]
+        if n_runs == 0:
             return
-        row0 = v if y0.shape[0] > 1 else 0
-        # eta' is filled in on the host. (Copying the row into a local array
-        # costs registers and spills, per ptxas: scripts/cuda_ptx_report.py.)
-        p = params[v]
-        pts = points[v]
-        tpts = t_points[v]
-        cap = pts.shape[0]
-
         y = cuda.local.array(NS, float64)
         ynew = cuda.local.array(NS, float64)
         ytmp = cuda.local.array(NS, float64)
@@ -211,288 +180,308 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
         lu = cuda.local.array((N_OSC, 4, 4), float64)
         piv = cuda.local.array((N_OSC, 4), int64)
         z = cuda.local.array((N_OSC, 4), float64)
-        for i in range(N_OSC):
-            for r in range(4):
-                jcol[i, r] = 0.0
-                jrow[i, r] = 0.0
-                z[i, r] = 0.0
-        for i in range(NS):
-            y[i] = y0[row0, i]
-            ymin[i] = math.inf
-            ymax[i] = -math.inf
 
-        t_conv[v] = math.nan
-        # parameters or start not finite: "error", as the CPU kernel
-        bad = False
-        for i in range(p.shape[0]):
-            if not math.isfinite(p[i]):
-                bad = True
-        for i in range(NS):
-            if not math.isfinite(y[i]):
-                bad = True
-        if bad:
-            for k in range(cap):
-                tpts[k] = math.nan
-                for i in range(NS):
-                    pts[k, i] = math.nan
-            for i in range(NS):
-                final_state[v, i] = y[i]
-            ints[v, 0] = 0
-            ints[v, 1] = 0
-            ints[v, 2] = _ST_ERROR
-            ints[v, 3] = 0
-            ints[v, 4] = 0
-            ints[v, 5] = 0
-            return
-
+        # A persistent thread: it takes the next run from ``queue`` (an atomic counter)
+        # whenever its run ends, and every pass of the loop below advances its run by
+        # one step. A warp's lanes so keep stepping together while their runs differ in
+        # length, instead of idling until the longest run of the warp ends. A run's
+        # arithmetic does not depend on the thread that does it.
+        v = -1
+        running = False
+        row0 = 0
+        p = params[0]
+        pts = points[0]
+        tpts = t_points[0]
+        cap = pts.shape[0]
         n_steps = 0
         n_rej = 0
         n_cross = 0
         status = _ST_OK
         t = 0.0
-
-        rhs(y, p, N_OSC, DC, f0)
-        if t_transient <= 0.0:
-            for i in range(NS):
-                ymin[i] = y[i]
-                ymax[i] = y[i]
-
-        adaptive = h_fixed <= 0.0
-        if adaptive:
-            h = _initial_step(y, f0, p, N_OSC, DC, rtol, atol, _Q - 1.0, ytmp, ftmp)
-            h = min(h, t_end)
-        else:
-            h = h_fixed
+        h = 0.0
+        adaptive = True
         err_prev = 1.0
         last_rejected = False
         jac_fresh = False
         jcorner = 0.0
-        # converged stopping (stoprules.converged_stop, operation for operation)
-        phase = 0  # 1: converged, recording the last points
+        phase = 0
         rest_since = math.nan
         d1_rest_since = math.nan
         last_cross = math.nan
         checked = -1
         target = 0
-        if not converged:  # a start at rest is at rest from t = 0, as stoprules.reset_stop
-            at_rest0 = True
-            for i in range(N_OSC):
-                if not (
-                    abs(y[4 * i + 1]) <= equilibrium_tol and abs(y[4 * i + 3]) <= equilibrium_tol
-                ):
-                    at_rest0 = False
-            if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
-                d1_rest_since = 0.0
-            if at_rest0:
-                rest_since = 0.0
+        while True:
+            if not running:
+                if v >= 0:  # the run that just ended
+                    # ---- classification, as trajectory._run / _lane_values
+                    for i in range(NS):
+                        final_state[v, i] = y[i]
+                    if status == _ST_OK:
+                        vb_end = y[NS - 1] if DC else 0.0
+                        rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
+                        # the host passes t_transient = 0 if converged
+                        tail = min(dwell, t - t_transient)
+                        d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
+                        since = math.inf if math.isnan(last_cross) else t - last_cross
+                        status = classify(rest_time, d1_rest, tail, since, DC, vb_end, p[P_VB0])
+                    count = 0
+                    period = 0
+                    if status == _ST_OK:
+                        count = min(n_cross, cap)
+                        _time_order(pts, tpts, n_cross)
+                        period = detect_period(pts, count, period_tol, max_period)
+                    _nan_rows(pts, tpts, count)
+                    _write_counts(ints, v, count, period, status, n_steps, n_rej, n_cross)
+                v = cuda.atomic.add(queue, 0, 1)
+                if v >= n_runs:
+                    return
+                row0 = v if y0.shape[0] > 1 else 0
+                # eta' is filled in on the host. (Copying the row into a local array
+                # costs registers and spills, per ptxas: scripts/cuda_ptx_report.py.)
+                p = params[v]
+                pts = points[v]
+                tpts = t_points[v]
+                cap = pts.shape[0]
+                for i in range(N_OSC):
+                    for r in range(4):
+                        jcol[i, r] = 0.0
+                        jrow[i, r] = 0.0
+                        z[i, r] = 0.0
                 for i in range(NS):
-                    wmin[i] = y[i]
-                    wmax[i] = y[i]
+                    y[i] = y0[row0, i]
+                    ymin[i] = math.inf
+                    ymax[i] = -math.inf
 
-        while t < t_end:
-            if n_steps >= max_steps or n_rej >= max_steps:
-                status = _ST_MAX_STEPS
-                break
-            if t + h >= t_end or (adaptive and t + 1.01 * h >= t_end):
-                h = t_end - t
-            if not jac_fresh:
-                jcorner = jacobian_blocks(y, p, N_OSC, DC, jb, jcol, jrow)
-                jac_fresh = True
+                t_conv[v] = math.nan
+                # parameters or start not finite: "error", as the CPU kernel
+                bad = False
+                for i in range(p.shape[0]):
+                    if not math.isfinite(p[i]):
+                        bad = True
+                for i in range(NS):
+                    if not math.isfinite(y[i]):
+                        bad = True
+                if bad:
+                    _nan_rows(pts, tpts, 0)
+                    for i in range(NS):
+                        final_state[v, i] = y[i]
+                    _write_counts(ints, v, 0, 0, _ST_ERROR, 0, 0, 0)
+                    v = -1  # written: no classification for this run
+                    continue
 
-            # ---- one Rosenbrock step (transformed form), as steppers.rosenbrock_step
-            ok = True
-            schur = w_factor(1.0 / (h * _GAMMA), jb, jcol, jrow, jcorner, N_OSC, DC, lu, piv, z)
-            if not math.isfinite(schur):
-                ok = False
-            if ok:
-                inv_h = 1.0 / h
-                for st in range(NST):
-                    if st == 0:
-                        for i in range(NS):
-                            ftmp[i] = f0[i]
-                    else:
-                        for i in range(NS):
-                            acc = 0.0
-                            for j in range(st):
-                                acc += _A[st, j] * K[j, i]
-                            ytmp[i] = y[i] + acc
-                        rhs(ytmp, p, N_OSC, DC, ftmp)
-                    for i in range(NS):
-                        acc = 0.0
-                        for j in range(st):
-                            acc += _C[st, j] * K[j, i]
-                        K[st, i] = ftmp[i] + inv_h * acc
-                    w_solve(lu, piv, z, jrow, schur, N_OSC, DC, K[st])
-                    for i in range(NS):
-                        if not math.isfinite(K[st, i]):
-                            ok = False
-                    if not ok:
-                        break
-            if ok:
-                for i in range(NS):
-                    acc = 0.0
-                    e = 0.0
-                    for j in range(NST):
-                        acc += _B[j] * K[j, i]
-                        e += _E[j] * K[j, i]
-                    ynew[i] = y[i] + acc
-                    err[i] = e
-                for i in range(NS):
-                    if not math.isfinite(ynew[i]):
-                        ok = False
-            # ---- error control
-            en = 0.0
-            if not adaptive:
-                if not ok:
-                    status = _ST_NONFINITE
-                    break
-            elif ok:
-                en = _error_norm(err, y, ynew, rtol, atol)
-                if not math.isfinite(en):
-                    ok = False
-            if adaptive and (not ok or en > 1.0):
-                n_rej += 1
-                if not ok:
-                    h *= 0.25
-                else:
-                    h *= max(_FAC_MIN, _SAFETY * en ** (-1.0 / _Q))
-                last_rejected = True
-                # "not >=" also catches a step size that is not a number
-                if not (h >= 1e-14 * max(1.0, abs(t))):
-                    status = _ST_UNDERFLOW if ok else _ST_NONFINITE
-                    break
-                continue
+                n_steps = 0
+                n_rej = 0
+                n_cross = 0
+                status = _ST_OK
+                t = 0.0
 
-            # ---- accepted: Poincare crossing on the dense output, window amplitude
-            n_steps += 1
-            t1 = t + h
-            if y[1] < 0.0 <= ynew[1]:
-                for r in range(NDN):
-                    for i in range(NS):
-                        acc = 0.0
-                        for j in range(NST):
-                            acc += _H[r, j] * K[j, i]
-                        D[r, i] = acc
-                theta = _locate_upcrossing(y, ynew, D, 1)
-                tc = t + theta * h
-                if tc >= t_transient:
-                    if cap > 0:
-                        slot = n_cross % cap
-                        for i in range(NS):
-                            pts[slot, i] = _dense_value(theta, y, ynew, D, i)
-                        tpts[slot] = tc
-                    n_cross += 1
-                    last_cross = t1  # the step's end, as stoprules.time_since_crossing
-            if t1 >= t_transient:
-                for i in range(NS):
-                    vv = ynew[i]
-                    if vv < ymin[i]:
-                        ymin[i] = vv
-                    if vv > ymax[i]:
-                        ymax[i] = vv
-            t = t + h
-            for i in range(NS):
-                y[i] = ynew[i]
-            rhs(y, p, N_OSC, DC, f0)
-            jac_fresh = False
-            if adaptive:
-                en_c = max(en, 1e-10)
-                fac = _SAFETY * en_c ** (-_PI_ALPHA / _Q) * err_prev ** (_PI_BETA / _Q)
-                fac = min(_FAC_MAX, max(_FAC_MIN, fac))
-                if last_rejected:
-                    fac = min(fac, 1.0)
-                h *= fac
-                err_prev = max(en, 1e-10)
-                last_rejected = False
-            # ---- rest, tracked always (the classification reads it), as stoprules.track_rest
-            if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
-                if math.isnan(d1_rest_since):
-                    d1_rest_since = t
-            else:
-                d1_rest_since = math.nan
-            at_rest = True
-            for i in range(N_OSC):
-                if not (
-                    abs(y[4 * i + 1]) <= equilibrium_tol and abs(y[4 * i + 3]) <= equilibrium_tol
-                ):
-                    at_rest = False
-            if at_rest:
-                if math.isnan(rest_since):
-                    rest_since = t
-                    for i in range(NS):
-                        wmin[i] = y[i]
-                        wmax[i] = y[i]
-                else:
-                    for i in range(NS):
-                        wmin[i] = min(wmin[i], y[i])
-                        wmax[i] = max(wmax[i], y[i])
-                    if DC and wmax[NS - 1] - wmin[NS - 1] > equilibrium_tol:
-                        rest_since = t
-                        for i in range(NS):
-                            wmin[i] = y[i]
-                            wmax[i] = y[i]
-            else:
-                rest_since = math.nan
-            if not converged:
-                continue
-            # ---- converged stopping, as stoprules.converged_now
-            if phase == 1:
-                if n_cross >= target:
-                    break
-                continue
-            if at_rest and t - rest_since >= dwell:
-                for i in range(NS):  # the recording window is the dwell window
-                    ymin[i] = wmin[i]
-                    ymax[i] = wmax[i]
-                t_conv[v] = rest_since
-                break
-            if n_cross != checked:  # repeating points: checked once per new crossing
-                checked = n_cross
-                per = ring_period(pts, n_cross, period_tol, max_period, MIN_REPEATS, MIN_POINTS)
-                # at rest, dx1 flickers around 0 and gives repeating "points"
-                if per > 0 and not at_rest:
-                    phase = 1
-                    t_conv[v] = t
-                    target = min(cap, max(MIN_POINTS, 4 * per))
-                    n_cross = 0  # a fresh recording window from here
-                    checked = 0
+                rhs(y, p, N_OSC, DC, f0)
+                if t_transient <= 0.0:
                     for i in range(NS):
                         ymin[i] = y[i]
                         ymax[i] = y[i]
 
-        # ---- classification, as trajectory._run / _lane_values
-        for i in range(NS):
-            final_state[v, i] = y[i]
-        if status == _ST_OK:
-            vb_end = y[NS - 1] if DC else 0.0
-            rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
-            tail = min(dwell, t - t_transient)  # the host passes t_transient = 0 if converged
-            d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
-            since = math.inf if math.isnan(last_cross) else t - last_cross
-            status = classify(rest_time, d1_rest, tail, since, DC, vb_end, p[P_VB0])
-        count = 0
-        period = 0
-        if status == _ST_OK:
-            count = min(n_cross, cap)
-            # unroll the ring into time order: rotate left by n_cross % cap
-            if cap > 0 and n_cross > cap:
-                start = n_cross % cap
-                if start > 0:
-                    _reverse_rows(pts, tpts, 0, start)
-                    _reverse_rows(pts, tpts, start, cap)
-                    _reverse_rows(pts, tpts, 0, cap)
-            period = detect_period(pts, count, period_tol, max_period)
-        else:
-            count = 0
-        for k in range(count, cap):
-            tpts[k] = math.nan
-            for i in range(NS):
-                pts[k, i] = math.nan
-        ints[v, 0] = count
-        ints[v, 1] = period
-        ints[v, 2] = status
-        ints[v, 3] = n_steps
-        ints[v, 4] = n_rej
-        ints[v, 5] = n_cross
+                adaptive = h_fixed <= 0.0
+                if adaptive:
+                    h = _initial_step(y, f0, p, N_OSC, DC, rtol, atol, _Q - 1.0, ytmp, ftmp)
+                    h = min(h, t_end)
+                else:
+                    h = h_fixed
+                err_prev = 1.0
+                last_rejected = False
+                jac_fresh = False
+                jcorner = 0.0
+                # converged stopping (stoprules.converged_stop, operation for operation)
+                phase = 0  # 1: converged, recording the last points
+                rest_since = math.nan
+                d1_rest_since = math.nan
+                last_cross = math.nan
+                checked = -1
+                target = 0
+                if not converged:  # a start at rest is at rest from t = 0, as stoprules.reset_stop
+                    at_rest0 = _disks_at_rest(y, N_OSC, equilibrium_tol)
+                    if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
+                        d1_rest_since = 0.0
+                    if at_rest0:
+                        rest_since = 0.0
+                        for i in range(NS):
+                            wmin[i] = y[i]
+                            wmax[i] = y[i]
+
+                running = t < t_end
+                if not running:
+                    continue
+            for _step in range(1):  # one step; "break" ends the run, "continue" the step
+                if n_steps >= max_steps or n_rej >= max_steps:
+                    status = _ST_MAX_STEPS
+                    running = False
+                    break
+                if t + h >= t_end or (adaptive and t + 1.01 * h >= t_end):
+                    h = t_end - t
+                if not jac_fresh:
+                    jcorner = jacobian_blocks(y, p, N_OSC, DC, jb, jcol, jrow)
+                    jac_fresh = True
+
+                # ---- one Rosenbrock step (transformed form), as steppers.rosenbrock_step
+                ok = True
+                schur = w_factor(1.0 / (h * _GAMMA), jb, jcol, jrow, jcorner, N_OSC, DC, lu, piv, z)
+                if not math.isfinite(schur):
+                    ok = False
+                if ok:
+                    inv_h = 1.0 / h
+                    for st in range(NST):
+                        if st == 0:
+                            for i in range(NS):
+                                ftmp[i] = f0[i]
+                        else:
+                            for i in range(NS):
+                                acc = 0.0
+                                for j in range(st):
+                                    acc += _A[st, j] * K[j, i]
+                                ytmp[i] = y[i] + acc
+                            rhs(ytmp, p, N_OSC, DC, ftmp)
+                        for i in range(NS):
+                            acc = 0.0
+                            for j in range(st):
+                                acc += _C[st, j] * K[j, i]
+                            K[st, i] = ftmp[i] + inv_h * acc
+                        w_solve(lu, piv, z, jrow, schur, N_OSC, DC, K[st])
+                        for i in range(NS):
+                            if not math.isfinite(K[st, i]):
+                                ok = False
+                        if not ok:
+                            break
+                if ok:
+                    for i in range(NS):
+                        acc = 0.0
+                        e = 0.0
+                        for j in range(NST):
+                            acc += _B[j] * K[j, i]
+                            e += _E[j] * K[j, i]
+                        ynew[i] = y[i] + acc
+                        err[i] = e
+                    for i in range(NS):
+                        if not math.isfinite(ynew[i]):
+                            ok = False
+                # ---- error control
+                en = 0.0
+                if not adaptive:
+                    if not ok:
+                        status = _ST_NONFINITE
+                        running = False
+                        break
+                elif ok:
+                    en = _error_norm(err, y, ynew, rtol, atol)
+                    if not math.isfinite(en):
+                        ok = False
+                if adaptive and (not ok or en > 1.0):
+                    n_rej += 1
+                    if not ok:
+                        h *= 0.25
+                    else:
+                        h *= max(_FAC_MIN, _SAFETY * en ** (-1.0 / _Q))
+                    last_rejected = True
+                    # "not >=" also catches a step size that is not a number
+                    if not (h >= 1e-14 * max(1.0, abs(t))):
+                        status = _ST_UNDERFLOW if ok else _ST_NONFINITE
+                        running = False
+                        break
+                    continue
+
+                # ---- accepted: Poincare crossing on the dense output, window amplitude
+                n_steps += 1
+                t1 = t + h
+                if y[1] < 0.0 <= ynew[1]:
+                    for r in range(NDN):
+                        for i in range(NS):
+                            acc = 0.0
+                            for j in range(NST):
+                                acc += _H[r, j] * K[j, i]
+                            D[r, i] = acc
+                    theta = _locate_upcrossing(y, ynew, D, 1)
+                    tc = t + theta * h
+                    if tc >= t_transient:
+                        if cap > 0:
+                            slot = n_cross % cap
+                            for i in range(NS):
+                                pts[slot, i] = _dense_value(theta, y, ynew, D, i)
+                            tpts[slot] = tc
+                        n_cross += 1
+                        last_cross = t1  # the step's end, as stoprules.time_since_crossing
+                if t1 >= t_transient:
+                    for i in range(NS):
+                        vv = ynew[i]
+                        if vv < ymin[i]:
+                            ymin[i] = vv
+                        if vv > ymax[i]:
+                            ymax[i] = vv
+                t = t + h
+                for i in range(NS):
+                    y[i] = ynew[i]
+                rhs(y, p, N_OSC, DC, f0)
+                jac_fresh = False
+                if adaptive:
+                    en_c = max(en, 1e-10)
+                    fac = _SAFETY * en_c ** (-_PI_ALPHA / _Q) * err_prev ** (_PI_BETA / _Q)
+                    fac = min(_FAC_MAX, max(_FAC_MIN, fac))
+                    if last_rejected:
+                        fac = min(fac, 1.0)
+                    h *= fac
+                    err_prev = max(en, 1e-10)
+                    last_rejected = False
+                # ---- rest, tracked always (the classification reads it), as stoprules.track_rest
+                if abs(y[1]) <= equilibrium_tol and abs(y[3]) <= equilibrium_tol:
+                    if math.isnan(d1_rest_since):
+                        d1_rest_since = t
+                else:
+                    d1_rest_since = math.nan
+                at_rest = _disks_at_rest(y, N_OSC, equilibrium_tol)
+                if at_rest:
+                    if math.isnan(rest_since):
+                        rest_since = t
+                        for i in range(NS):
+                            wmin[i] = y[i]
+                            wmax[i] = y[i]
+                    else:
+                        for i in range(NS):
+                            wmin[i] = min(wmin[i], y[i])
+                            wmax[i] = max(wmax[i], y[i])
+                        if DC and wmax[NS - 1] - wmin[NS - 1] > equilibrium_tol:
+                            rest_since = t
+                            for i in range(NS):
+                                wmin[i] = y[i]
+                                wmax[i] = y[i]
+                else:
+                    rest_since = math.nan
+                if not converged:
+                    continue
+                # ---- converged stopping, as stoprules.converged_now
+                if phase == 1:
+                    if n_cross >= target:
+                        running = False
+                        break
+                    continue
+                if at_rest and t - rest_since >= dwell:
+                    for i in range(NS):  # the recording window is the dwell window
+                        ymin[i] = wmin[i]
+                        ymax[i] = wmax[i]
+                    t_conv[v] = rest_since
+                    running = False
+                    break
+                if n_cross != checked:  # repeating points: checked once per new crossing
+                    checked = n_cross
+                    per = ring_period(pts, n_cross, period_tol, max_period, MIN_REPEATS, MIN_POINTS)
+                    # at rest, dx1 flickers around 0 and gives repeating "points"
+                    if per > 0 and not at_rest:
+                        phase = 1
+                        t_conv[v] = t
+                        target = min(cap, max(MIN_POINTS, 4 * per))
+                        n_cross = 0  # a fresh recording window from here
+                        checked = 0
+                        for i in range(NS):
+                            ymin[i] = y[i]
+                            ymax[i] = y[i]
+            if not t < t_end:
+                running = False
 
     return sweep_kernel

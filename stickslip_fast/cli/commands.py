@@ -211,7 +211,7 @@ def _add_batch_options(p: argparse.ArgumentParser, where: str, per: str) -> None
         "--backend",
         choices=("local", "dask", "cuda"),
         help=f"where {where} (default: local, or dask with --scheduler/--workers); "
-        f"cuda: one GPU thread per {per} (docs/gpu.md)",
+        f"cuda: one GPU run per {per} (docs/gpu.md)",
     )
 
 
