@@ -168,3 +168,39 @@ def test_fold_flip_on_fold_and_period_doubling_curves():
     np.testing.assert_allclose(xs[:, 0], -xs[:, 3], atol=1e-11)
     assert [k for k, _, _ in codim2] == ["fold-flip"] and status == "bounds"
     np.testing.assert_allclose(codim2[0][2][2:], 0.0, atol=1e-8)
+
+
+def rotating_fold(x):
+    # x -> x + R F(R^T x) with F = (a - 0.3 sin(th) - u1^2, -u2 / 2): the fold curve is
+    # a = 0.3 sin(th), z = 0, and its null vector R e1 turns by phi(th), a quarter turn by
+    # th = 1.5, where it stays: orthogonal to the start's borders from there on
+    z, a, th = x[:2], x[2], x[3]
+    t = min(max(th / 1.5, 0.0), 1.0)
+    phi = 0.5 * np.pi * (3 * t * t - 2 * t**3)
+    dphi = np.pi * 2 * t * (1 - t) if 0.0 < t < 1.0 else 0.0
+    c, s = np.cos(phi), np.sin(phi)
+    R, dR = np.array([[c, -s], [s, c]]), np.array([[-s, -c], [c, -s]])
+    u = R.T @ z
+    F = np.array([a - 0.3 * np.sin(th) - u[0] ** 2, -0.5 * u[1]])
+    DFu = np.array([[-2 * u[0], 0.0], [0.0, -0.5]])
+    Gz = R @ DFu @ R.T
+    Gth = dphi * (dR @ F + R @ DFu @ (dR.T @ z)) + R @ np.array([-0.3 * np.cos(th), 0.0])
+    return True, R @ F, np.column_stack([Gz, R[:, 0], Gth]), np.eye(2) + Gz
+
+
+def test_borders_follow_a_turning_null_vector():
+    # With the start's borders the bordered matrix is singular once the null vector has
+    # turned a quarter: the fixed curve crawls at th = 1.5 until max_points. Adapted
+    # borders pass and end on the bound, every point on the analytic curve.
+    x0 = np.array([0.0, 0.0, 1e-3, 0.0])
+    kw = dict(KW, max_points=200)
+    xs, _, _, status, _ = follow_curve(rotating_fold, x0, "fold", 1, (-0.1, 3.2),
+                                       borders="fixed", **kw)  # fmt: skip
+    assert status != "bounds" and xs[-1, 3] < 1.5 + 1e-3
+    xs, _, codim2, status, _ = follow_curve(rotating_fold, x0, "fold", 1, (-0.1, 3.2), **kw)
+    assert status == "bounds" and xs[-1, 3] == 3.2
+    np.testing.assert_allclose(xs[:, 2], 0.3 * np.sin(xs[:, 3]), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(xs[:, :2], 0.0, atol=1e-11)
+    assert codim2 == []  # the turn of a = 0.3 sin(th) in a at th = pi/2 is no codim-2 point
+    with pytest.raises(ValueError, match="borders"):
+        follow_curve(rotating_fold, x0, "fold", 1, (-0.1, 3.2), borders="free", **kw)

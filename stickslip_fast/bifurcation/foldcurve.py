@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -80,26 +81,66 @@ def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray,
     spectrum function wants). ``h``: the step of the directional difference along v.
     ``scale``: 1 / |grad g| at the start, so that the corrector's tolerance on the test
     function is a distance (near a sharp fold of Fig. 6, |grad g| ~ 1e6).
+
+    The evaluator keeps the borders, the scale and the last bordered solutions (v, w)
+    in ``evaluate.state``, which :func:`refresh_borders` reads and updates.
     """
     shift = CURVE_KINDS[kind]
     eye = np.eye(n_z)
+    state = dict(b=b, c=c, scale=scale, v=None, w=None, refreshed=0)
 
     def evaluate(x):
         ok, G, DG, A = base(x)
         if not ok:
             return False, None, None, None
         try:
-            v, w, g = _bordered(DG[:, :n_z] + shift * eye, b, c)
+            v, w, g = _bordered(DG[:, :n_z] + shift * eye, state["b"], state["c"])
         except np.linalg.LinAlgError:
             return False, None, None, None
+        state["v"], state["w"] = v, w
         nv = float(np.linalg.norm(v))
         diff = central_difference(base, x, v, n_z, h, nv)
         if diff is None:
             return False, None, None, None
         grad = -(w @ diff) * (nv / (2 * h))
-        return True, np.r_[G, scale * g], np.vstack([DG, scale * grad]), A
+        sc = state["scale"]
+        return True, np.r_[G, sc * g], np.vstack([DG, sc * grad]), A
 
+    evaluate.state = state
     return evaluate
+
+
+#: The borders are refreshed once the null vectors have turned more than 60 degrees
+#: away from them: c . v = 1 (the bordered system's last row) with |c| = 1, so the
+#: angle's cosine is 1 / |v|.
+BORDER_DRIFT = 2.0
+
+
+def refresh_borders(evaluate: Callable, x: np.ndarray) -> bool:
+    """New borders from the null vectors at ``x``, where they have drifted from the old.
+
+    Along a long curve the singular vectors of M turn; where one comes near to
+    orthogonal to its border the bordered matrix becomes singular and the corrector
+    fails (MatCont and BifurcationKit.jl adapt their borders for the same reason).
+    ``evaluate`` (from :func:`augmented`) must have been called last at or near ``x``
+    (the corrector ends at the point it accepts; locating a codim-2 point between two
+    points evaluates between them). When |v| or |w| exceeds
+    :data:`BORDER_DRIFT`, the borders become w / |w| and v / |v| and the scale is
+    taken again (one more evaluation); otherwise nothing changes, so a curve that
+    never drifts that far is computed as with fixed borders. Returns True if
+    refreshed.
+    """
+    st = evaluate.state
+    v, w = st["v"], st["w"]
+    if v is None or max(np.linalg.norm(v), np.linalg.norm(w)) <= BORDER_DRIFT:
+        return False
+    st["b"], st["c"] = w / np.linalg.norm(w), v / np.linalg.norm(v)
+    st["scale"] = 1.0
+    ok, _, DF, _ = evaluate(x)
+    if ok:
+        st["scale"] = 1.0 / max(float(np.linalg.norm(DF[-1])), 1e-300)
+    st["refreshed"] += 1
+    return True
 
 
 def curve_tests(A, t: np.ndarray) -> dict[str, float]:
@@ -150,14 +191,19 @@ def follow_curve(
     *,
     h: float = 1e-7,
     tests: Callable | None = None,
+    borders: str = "adapt",
     **settings,
 ):
     """Follow a fold or period-doubling curve through x0 = (z, l1, l2), a point near it.
 
     ``tests``: the codim-2 test functions (default :func:`map_curve_tests` of ``kind``).
+    ``borders``: "adapt" (refreshed where the null vectors have turned away from them,
+    :func:`refresh_borders`) or "fixed" (those of the start throughout).
     ``settings``: ds, ds_min, ds_max, max_points, tol (required), spectrum, locate_tol of
     :func:`run_curve`. Returns (xs, mults, codim2, status, x_start) as :func:`run_curve`.
     """
+    if borders not in ("adapt", "fixed"):
+        raise ValueError(f'borders must be "adapt" or "fixed", got {borders!r}')
     n_z = x0.size - 2
     ok, G, DG, _ = base(x0)
     if not ok:
@@ -167,8 +213,21 @@ def follow_curve(
     if not ok:
         return None, None, [], "start-failed", x0
     evaluate = augmented(base, n_z, kind, b, c, h, 1.0 / max(float(np.linalg.norm(DF[-1])), 1e-300))
+    after_step = (lambda x: refresh_borders(evaluate, x)) if borders == "adapt" else None
     return run_curve(evaluate, x0, direction, bounds2, tests=tests or map_curve_tests(kind),
-                     **settings)  # fmt: skip
+                     after_step=after_step, **settings)  # fmt: skip
+
+
+def _never_stop(after_step):
+    """``after_step`` as :func:`pseudo_arclength`'s per-point ``stop`` hook, which never stops."""
+    if after_step is None:
+        return None
+
+    def stop(x, data, walk):
+        after_step(x)
+        return False
+
+    return stop
 
 
 def run_curve(
@@ -185,9 +244,13 @@ def run_curve(
     tests: Callable = curve_tests,
     spectrum: Callable | None = None,
     locate_tol: float = 1e-9,
+    after_step: Callable[[np.ndarray], Any] | None = None,
 ):
     """Continue the augmented system ``evaluate`` from x0 (corrected first at fixed l2, the
     last coordinate; l1 is the one before it) and name the codim-2 points.
+
+    ``after_step(x)`` is called at every accepted point, after its tests (the borders'
+    refresh of :func:`follow_curve`).
 
     Sign changes of "turn-1"/"turn-2" are a "cusp" where both parameter components of the
     tangent are below :data:`CUSP_SPEED`, else "turn-2" is an "extremum" (and "turn-1"
@@ -203,7 +266,7 @@ def run_curve(
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x_start, direction, bounds2, ds=ds, ds_min=ds_min, ds_max=ds_max,
         max_points=max_points, tol=tol, locate_tol=locate_tol, tests=tests,
-        spectrum=spectrum,
+        spectrum=spectrum, stop=_never_stop(after_step),
     )  # fmt: skip
     codim2 = []
     for name, _, index, x in bifs:
