@@ -107,3 +107,44 @@ def test_curve_file_round_trip_of_the_optional_fields(tmp_path):
     back = ssf.Curve.from_hdf5(st.to_hdf5(tmp_path / "st.h5"))
     assert back.kind == "stick-phase" and back.event == event and back.theta is None
     np.testing.assert_array_equal(back.event_time, [2.5])
+
+
+NS_ANGLE = 1.0
+
+
+def turning_ns(x):
+    # z -> A z, A = Q(phi) diag(r Rot(1), I2 / 2) Q(phi)^T with r = 1 + a - 0.3 sin(th):
+    # the NS curve a = 0.3 sin(th) at angle 1; Q turns the plane of the complex pair
+    # into the other two coordinates by phi(th), a quarter turn by th = 1.5, where the
+    # complex null vector is orthogonal to the start's borders
+    z, a, th = x[:4], x[4], x[5]
+    t = min(max(th / 1.5, 0.0), 1.0)
+    phi = 0.5 * np.pi * (3 * t * t - 2 * t**3)
+    dphi = np.pi * 2 * t * (1 - t) if 0.0 < t < 1.0 else 0.0
+    c, s, eye2, zero2 = np.cos(phi), np.sin(phi), np.eye(2), np.zeros((2, 2))
+    Q = np.block([[c * eye2, -s * eye2], [s * eye2, c * eye2]])
+    dQ = np.block([[-s * eye2, -c * eye2], [c * eye2, -s * eye2]]) * dphi
+    rot = np.array([[math.cos(NS_ANGLE), -math.sin(NS_ANGLE)],
+                    [math.sin(NS_ANGLE), math.cos(NS_ANGLE)]])  # fmt: skip
+    r = 1.0 + a - 0.3 * np.sin(th)
+    B = np.block([[r * rot, zero2], [zero2, 0.5 * eye2]])
+    dB = np.block([[rot, zero2], [zero2, zero2]])  # dB / dr
+    A = Q @ B @ Q.T
+    dA_a = Q @ dB @ Q.T
+    dA_th = dQ @ B @ Q.T + Q @ B @ dQ.T - 0.3 * np.cos(th) * dA_a
+    return True, A @ z - z, np.column_stack([A - np.eye(4), dA_a @ z, dA_th @ z]), A
+
+
+def test_ns_borders_follow_a_turning_complex_null_vector():
+    # Fixed borders stop short of th = 1.5 (the bordered matrix is singular from there);
+    # adapted borders end on the bound, on the curve a = 0.3 sin(th) at angle 1.
+    x0 = np.array([0.0, 0.0, 0.0, 0.0, 1e-3, 0.0])
+    kw = dict(KW, max_points=200)
+    xs, _, _, status = follow_ns_curve(turning_ns, x0, 1, (-0.1, 3.2), borders="fixed", **kw)
+    assert status != "bounds" and xs[-1, 6] < 1.5
+    xs, _, codim2, status = follow_ns_curve(turning_ns, x0, 1, (-0.1, 3.2), **kw)
+    assert status == "bounds" and xs[-1, 6] == 3.2
+    np.testing.assert_allclose(xs[:, 5], 0.3 * np.sin(xs[:, 6]), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(xs[:, 4], NS_ANGLE, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(xs[:, :4], 0.0, atol=1e-11)
+    assert codim2 == []

@@ -83,7 +83,8 @@ def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray,
     function is a distance (near a sharp fold of Fig. 6, |grad g| ~ 1e6).
 
     The evaluator keeps the borders, the scale and the last bordered solutions (v, w)
-    in ``evaluate.state``, which :func:`refresh_borders` reads and updates.
+    in ``evaluate.state``, which :func:`refresh_borders` reads and updates (an NS
+    curve's evaluator, :func:`.nscurve.ns_augmented`, keeps the same record).
     """
     shift = CURVE_KINDS[kind]
     eye = np.eye(n_z)
@@ -119,7 +120,8 @@ BORDER_DRIFT = 2.0
 def refresh_borders(evaluate: Callable, x: np.ndarray) -> bool:
     """New borders from the null vectors at ``x``, where they have drifted from the old.
 
-    Along a long curve the singular vectors of M turn; where one comes near to
+    Real (fold, period-doubling) or complex (Neimark-Sacker) borders alike. Along a
+    long curve the singular vectors of M turn; where one comes near to
     orthogonal to its border the bordered matrix becomes singular and the corrector
     fails (MatCont and BifurcationKit.jl adapt their borders for the same reason).
     ``evaluate`` (from :func:`augmented`) must have been called last at or near ``x``
@@ -137,8 +139,8 @@ def refresh_borders(evaluate: Callable, x: np.ndarray) -> bool:
     st["b"], st["c"] = w / np.linalg.norm(w), v / np.linalg.norm(v)
     st["scale"] = 1.0
     ok, _, DF, _ = evaluate(x)
-    if ok:
-        st["scale"] = 1.0 / max(float(np.linalg.norm(DF[-1])), 1e-300)
+    if ok:  # the test function's rows: one (fold, period-doubling), two (NS: Re g, Im g)
+        st["scale"] = 1.0 / max(float(np.linalg.norm(DF[-st.get("rows", 1) :])), 1e-300)
     st["refreshed"] += 1
     return True
 

@@ -39,7 +39,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .detection import _sorted_eigs
-from .foldcurve import _product, central_difference, curve_tests, run_curve
+from .foldcurve import _product, central_difference, curve_tests, refresh_borders, run_curve
 
 #: The kind name of an NS curve (as :class:`~.branch.Bifurcation`'s).
 NS_KIND = "neimark-sacker"
@@ -76,7 +76,9 @@ def ns_augmented(base: Callable, n_z: int, b: np.ndarray, c: np.ndarray, h: floa
     """The evaluator of F = (G, scale Re g, scale Im g) at x = (z, theta, l1, l2) for
     :func:`.arclength.pseudo_arclength`, from ``base`` of :func:`.foldcurve.augmented`
     (at (z, l1, l2)). Its "A" is the pair (A, theta) (for :func:`ns_tests`). Fails
-    where theta is more than :data:`THETA_MARGIN` outside [0, pi]."""
+    where theta is more than :data:`THETA_MARGIN` outside [0, pi]. Borders, scale and
+    the last (v, w) live in ``evaluate.state``, as in :func:`.foldcurve.augmented`."""
+    state = dict(b=b, c=c, scale=scale, v=None, w=None, refreshed=0, rows=2)
 
     def evaluate(x):
         theta = float(x[n_z])
@@ -88,9 +90,10 @@ def ns_augmented(base: Callable, n_z: int, b: np.ndarray, c: np.ndarray, h: floa
             return False, None, None, None
         e = np.exp(1j * theta)
         try:
-            v, w, g = _bordered(A - e * np.eye(n_z), b, c)
+            v, w, g = _bordered(A - e * np.eye(n_z), state["b"], state["c"])
         except np.linalg.LinAlgError:
             return False, None, None, None
+        state["v"], state["w"] = v, w
         nv = float(np.linalg.norm(v))
         cols = []
         for part in (v.real, v.imag):
@@ -100,9 +103,11 @@ def ns_augmented(base: Callable, n_z: int, b: np.ndarray, c: np.ndarray, h: floa
             cols.append(diff * (nv / (2 * h)))
         grad_y = -(w.conj() @ (cols[0] + 1j * cols[1]))
         grad = np.r_[grad_y[:n_z], 1j * e * np.vdot(w, v), grad_y[n_z:]]
-        DF = np.vstack([np.insert(DG, n_z, 0.0, axis=1), scale * grad.real, scale * grad.imag])
-        return True, np.r_[G, scale * g.real, scale * g.imag], DF, (A, theta)
+        sc = state["scale"]
+        DF = np.vstack([np.insert(DG, n_z, 0.0, axis=1), sc * grad.real, sc * grad.imag])
+        return True, np.r_[G, sc * g.real, sc * g.imag], DF, (A, theta)
 
+    evaluate.state = state
     return evaluate
 
 
@@ -141,15 +146,20 @@ def follow_ns_curve(
     bounds2: tuple[float, float],
     *,
     h: float = 1e-7,
+    borders: str = "adapt",
     **settings,
 ):
     """Follow the NS curve through x0 = (z, l1, l2), a point near it.
 
+    ``borders``: "adapt" (refreshed where the complex null vectors have turned away
+    from them, :func:`.foldcurve.refresh_borders`) or "fixed" (the start's).
     ``settings``: those of :func:`.foldcurve.run_curve` (ds, ds_min, ds_max, max_points,
     tol). Returns (xs, mults, codim2, status) with xs (k, n + 3) = (z, theta, l1, l2);
     ``status`` as :func:`.foldcurve.run_curve`'s, "1:1" or "1:2" where the curve ended
     at that resonance (its last point), or "no-complex-pair" (the start has none).
     """
+    if borders not in ("adapt", "fixed"):
+        raise ValueError(f'borders must be "adapt" or "fixed", got {borders!r}')
     n_z = x0.size - 2
     ok, _, _, A = base(x0)
     theta = ns_angle(A) if ok else math.nan
@@ -162,9 +172,10 @@ def follow_ns_curve(
         return None, None, [], "start-failed"
     scale = 1.0 / max(float(np.linalg.norm(DF[-2:])), 1e-300)
     evaluate = ns_augmented(base, n_z, b, c, h, scale)
+    after_step = (lambda x: refresh_borders(evaluate, x)) if borders == "adapt" else None
     xs, mults, codim2, status, _ = run_curve(
         evaluate, x0t, direction, bounds2, tests=ns_tests,
-        spectrum=lambda At: _sorted_eigs(At[0]), **settings,
+        spectrum=lambda At: _sorted_eigs(At[0]), after_step=after_step, **settings,
     )  # fmt: skip
     if xs is None:
         return None, None, [], status
