@@ -216,3 +216,47 @@ def test_first_lyapunov_coefficient_of_the_dc_motor_hopf_point(dc_branch):
     ref = first_lyapunov(lambda y: scipy_model.jac(0.0, y, p), hopf.point,
                          scipy_model.jac(0.0, hopf.point, p), omega, 1e-3 * s.eps)  # fmt: skip
     assert l1 > 0 and abs(l1 - ref) < 1e-4 * abs(ref), (l1, ref)
+
+
+def turning_hopf(x):
+    # y' = Q g(Q^T y): g the Hopf normal form (mu + i) w - w |w|^2 in (u1, u2) and -u / 2
+    # in (u3, u4), mu = a - 0.3 sin(th): the Hopf curve a = 0.3 sin(th) with omega = 1.
+    # Q turns the (u1, u2) plane into (u3, u4) by phi(th), a quarter turn by th = 1.5,
+    # where the kernel of J^2 + I is orthogonal to the start's borders
+    y, a, th = x[:4], x[4], x[5]
+    t = min(max(th / 1.5, 0.0), 1.0)
+    phi = 0.5 * np.pi * (3 * t * t - 2 * t**3)
+    dphi = np.pi * 2 * t * (1 - t) if 0.0 < t < 1.0 else 0.0
+    c, s, eye2 = np.cos(phi), np.sin(phi), np.eye(2)
+    Q = np.block([[c * eye2, -s * eye2], [s * eye2, c * eye2]])
+    dQ = np.block([[-s * eye2, -c * eye2], [c * eye2, -s * eye2]]) * dphi
+    u = Q.T @ y
+    mu, r2 = a - 0.3 * np.sin(th), u[0] ** 2 + u[1] ** 2
+    g = np.array([mu * u[0] - u[1] - u[0] * r2, u[0] + mu * u[1] - u[1] * r2,
+                  -0.5 * u[2], -0.5 * u[3]])  # fmt: skip
+    Dg = np.diag([0.0, 0.0, -0.5, -0.5])
+    Dg[:2, :2] = [[mu - r2 - 2 * u[0] ** 2, -1 - 2 * u[0] * u[1]],
+                  [1 - 2 * u[0] * u[1], mu - r2 - 2 * u[1] ** 2]]  # fmt: skip
+    J = Q @ Dg @ Q.T
+    f_a = Q @ np.array([u[0], u[1], 0.0, 0.0])
+    f_th = dQ @ g + Q @ Dg @ (dQ.T @ y) - 0.3 * np.cos(th) * f_a
+    return True, Q @ g, np.column_stack([J, f_a, f_th]), J
+
+
+def test_hopf_borders_follow_a_turning_kernel():
+    # Fixed borders stop short of th = 1.5; adapted borders (new borders, entries and
+    # scales where the kernel has turned more than 60 degrees) end on the bound, on the
+    # curve a = 0.3 sin(th) with kappa = omega^2 = 1; l1 = -2 < 0 all along: no Bautin point
+    x0 = np.array([0.0, 0.0, 0.0, 0.0, 1.0, 1e-3, 0.0])
+    kw = dict(KW, max_points=200)
+    xs, _, _, status, _ = follow_hopf_curve(turning_hopf, x0, 1, (-0.1, 3.2), borders="fixed",
+                                            **kw)  # fmt: skip
+    assert status != "bounds" and xs[-1, 6] < 1.5
+    xs, _, codim2, status, _ = follow_hopf_curve(turning_hopf, x0, 1, (-0.1, 3.2), **kw)
+    assert status == "bounds" and xs[-1, 6] == 3.2
+    np.testing.assert_allclose(xs[:, 5], 0.3 * np.sin(xs[:, 6]), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(xs[:, 4], 1.0, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(xs[:, :4], 0.0, atol=1e-11)
+    assert codim2 == []
+    with pytest.raises(ValueError, match="borders"):
+        follow_hopf_curve(turning_hopf, x0, 1, (-0.1, 3.2), borders="free", **kw)

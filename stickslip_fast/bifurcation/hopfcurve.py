@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .detection import _eigs_by_real_part
-from .foldcurve import _others, _product, curve_tests, follow_curve, run_curve
+from .foldcurve import BORDER_DRIFT, _others, _product, curve_tests, follow_curve, run_curve
 
 
 # ------------------------------------------------------------ Lyapunov coefficient
@@ -141,6 +141,27 @@ class HopfSystem:
     def __init__(self, base, n, B, C, h, lyap_step, entries=((0, 0), (1, 1)), scale=(1.0, 1.0)):
         self.base, self.n, self.B, self.C, self.h = base, n, B, C, h
         self.lyap_step, self.entries, self.scale = lyap_step, entries, scale
+        self.last = None  # (V, W) of the last evaluation, for refresh()
+        self.refreshed = 0
+
+    def refresh(self, x) -> bool:
+        """New borders, entries and scales at x (:func:`hopf_system` there) where the
+        kernel of J^2 + kappa I has turned from the borders: C^T V = I, so the largest
+        singular value of V is 1 / cos of the largest angle between span C and the
+        kernel; refreshed where it (or W's) exceeds :data:`.foldcurve.BORDER_DRIFT`, as
+        :func:`.foldcurve.refresh_borders`. The last evaluation must be at or near x."""
+        if self.last is None:
+            return False
+        V, W = self.last
+        if max(np.linalg.norm(V, 2), np.linalg.norm(W, 2)) <= BORDER_DRIFT:
+            return False
+        new = hopf_system(self.base, x, self.h, self.lyap_step)
+        if new is None:
+            return False
+        self.B, self.C, self.entries, self.scale = new.B, new.C, new.entries, new.scale
+        self.last = None
+        self.refreshed += 1
+        return True
 
     def _along(self, xb, u):
         """D(u): the derivative of [J | f_l1 | f_l2] along (u, 0, 0), or None."""
@@ -164,6 +185,7 @@ class HopfSystem:
             V, W, G = _bordered2(J @ J + x[n] * np.eye(n), self.B, self.C)
         except np.linalg.LinAlgError:
             return (False,) + (None,) * 5
+        self.last = (V, W)
         D = [self._along(xb, u) for u in (V[:, 0], V[:, 1], J @ V[:, 0], J @ V[:, 1])]
         if any(d is None for d in D):
             return (False,) + (None,) * 5
@@ -217,18 +239,22 @@ def hopf_system(base: Callable, x0: np.ndarray, h: float = 1e-7, lyap_step: floa
 
 def follow_hopf_curve(base: Callable, x0: np.ndarray, direction: float,
                       bounds2: tuple[float, float], *, h: float = 1e-7,
-                      lyap_step: float = 1e-4, **settings):  # fmt: skip
+                      lyap_step: float = 1e-4, borders: str = "adapt", **settings):  # fmt: skip
     """Follow a Hopf curve through x0 = (y, kappa, l1, l2), a point near it.
 
-    ``settings``: those of :func:`.foldcurve.run_curve` (ds, ds_min, ds_max, max_points,
-    tol required). Returns (xs, eigenvalues, codim2, status, x_start) as
-    :func:`.foldcurve.run_curve`, xs in (y, kappa, l1, l2).
+    ``borders``: "adapt" (:meth:`HopfSystem.refresh` after every accepted point) or
+    "fixed" (the start's). ``settings``: those of :func:`.foldcurve.run_curve` (ds,
+    ds_min, ds_max, max_points, tol required). Returns (xs, eigenvalues, codim2, status,
+    x_start) as :func:`.foldcurve.run_curve`, xs in (y, kappa, l1, l2).
     """
+    if borders not in ("adapt", "fixed"):
+        raise ValueError(f'borders must be "adapt" or "fixed", got {borders!r}')
     system = hopf_system(base, x0, h, lyap_step)
     if system is None:
         return None, None, [], "start-failed", x0
+    after_step = system.refresh if borders == "adapt" else None
     return run_curve(system, x0, direction, bounds2, tests=hopf_tests, spectrum=hopf_spectrum,
-                     **settings)  # fmt: skip
+                     after_step=after_step, **settings)  # fmt: skip
 
 
 def follow_equilibrium_fold(base: Callable, x0: np.ndarray, direction: float,
