@@ -171,3 +171,33 @@ def test_a_remeshed_branch_keeps_to_the_orbits_of_the_fixed_mesh(monkeypatch):
         assert abs(mu[0] - np.linalg.eigvals(jac)[np.argmax(np.abs(np.linalg.eigvals(jac)))]) < 1e-6
     with pytest.raises(ValueError, match="remesh"):
         ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True)
+
+
+def test_the_walk_on_from_single_shooting_follows_the_way_in():
+    # Where single shooting stops at a fold its last steps crawl in eta with either sign,
+    # and the tangent there is orthogonal to eta: multiple shooting must be oriented by the
+    # way the branch came (a chord of at least CHORD_MIN), not by the sign of its last step
+    # (at k12 = -0.8316 the walk turned back along the stable branch from eta = 2.5706).
+    from types import SimpleNamespace
+
+    from stickslip_fast.bifurcation.multishoot import MESH_LIMIT
+    from stickslip_fast.bifurcation.multishoot_branch import continue_multiple, ms_start
+    from stickslip_fast.bifurcation.orbit_branch import CHORD_MIN, _chord_in
+
+    pts = np.array([[0.3, 0.0, 0.2, 0.0], [0.2, 0.0, 0.1, 0.0], [0.1, 0.0, 0.05, 0.0],
+                    [0.1 + 1e-12, 0.0, 0.05, 0.0]])  # fmt: skip
+    came = SimpleNamespace(points=pts, values=np.array([2.2, 2.1, 2.0, 2.0 + 1e-12]))
+    d_state, d_lam = _chord_in(came)  # the crawl is shorter than CHORD_MIN: skipped
+    assert CHORD_MIN > 1e-12 and d_lam < 0
+    np.testing.assert_allclose(d_state, pts[-1] - pts[1])
+    # on the model: with direction +1 in eta but a chord down in eta, the walk goes down
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    kw = dict(ds=0.01, ds_min=1e-8, ds_max=0.02, max_points=3, tol=1e-10, rtol=1e-11,
+              atol=1e-13, fd_step=1e-7, stick_events=False, sharp_ends=False)  # fmt: skip
+    x0, mesh = ms_start(s, orbit.points[0], orbit.T, "eta", 3, kw["rtol"], kw["atol"],
+                        kw["fd_step"], kw["tol"], MESH_LIMIT)  # fmt: skip
+    for chord, down in ((None, False), ((np.zeros(4), -1e-3), True)):
+        br = continue_multiple(s, "eta", 1, x0, 1.0, (1.9, 2.1), segments=mesh, stages=(),
+                               chord=chord, **kw)  # fmt: skip
+        assert br.values.size == 3 and (br.values[-1] < 2.0) == down, br.values

@@ -96,12 +96,15 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
 
 def continue_multiple(system0, param, period, x0, direction, bounds, *, segments, ds, ds_min,
                       ds_max, max_points, tol, rtol, atol, fd_step, stick_events,
-                      sharp_ends, stages, remesh=False) -> Branch:  # fmt: skip
+                      sharp_ends, stages, remesh=False, chord=None) -> Branch:  # fmt: skip
     """The branch through x0 = (u, lambda) by multiple shooting (``continue_orbit``'s arguments;
     ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
     segments are cut again (:func:`.multishoot.remesh`) wherever one amplifies by more
     than :data:`.multishoot.REMESH_LIMIT`; the branch is then followed in pieces, one per
-    mesh (:func:`walk_pieces`)."""
+    mesh (:func:`walk_pieces`). ``chord``: (d_state, d_lambda), the way the branch came
+    to x0 (a section point's change and the parameter's); when given, the first tangent
+    is oriented along it instead of by ``direction`` in lambda, which is undefined at a
+    fold."""
     settings = [(tol, rtol, atol, ds_min)]
     if sharp_ends:
         for stage in stages:
@@ -110,7 +113,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
                 settings.append(nxt)
     kw = dict(ds=ds, ds_max=ds_max, max_points=max_points, fd_step=fd_step)
     pieces, status = walk_pieces(system0, param, x0, direction, bounds, segments, settings,
-                                 remesh, kw)  # fmt: skip
+                                 remesh, dict(kw, chord=chord))  # fmt: skip
     _, system_at, _ = ms_evaluator(system0, param, segments, rtol, atol, fd_step)
     if status == "nonsmooth":
         last = pieces[-1]
@@ -228,6 +231,11 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         evaluate, system_at, shooting_at = ms_evaluator(system0, param, mesh, rtol, atol,
                                                         kw["fd_step"])  # fmt: skip
         ms = shooting_at(x_start[-1], None)
+        if orient is None and kw.get("chord") is not None:  # the first piece: the way in
+            d_state, d_lam = kw["chord"]
+            orient = np.zeros_like(x_start)
+            orient[: ms.n - 1] = np.asarray(d_state)[ms.mask]
+            orient[-1] = d_lam
         refine = []
         for t2, r2, a2, d2 in settings[stage + 1 :]:
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])

@@ -348,9 +348,33 @@ def _go_on_multiple(
                ds_min=ds_min, max_points=kw["max_points"] - branch.values.size + 1)  # fmt: skip
     kw2["ds"] = min(kw2["ds"], kw["ds_max"])
     second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
-                               segments=mesh, stages=(), remesh=remesh, **kw2)  # fmt: skip
+                               segments=mesh, stages=(), remesh=remesh,
+                               chord=_chord_in(branch), **kw2)  # fmt: skip
     second.system = orbit.system
     return append_branch(branch, second, f"single shooting: {branch.status}")
+
+
+#: The chord that orients multiple shooting where single shooting stopped spans at
+#: least this distance in (section point, parameter): longer than the crawl of a
+#: precision limit (steps of ds_min and below), so its direction is the branch's.
+CHORD_MIN = 1e-6
+
+
+def _chord_in(branch: Branch) -> tuple[np.ndarray, float]:
+    """(d_state, d_lambda) from the last point at least :data:`CHORD_MIN` before the end
+    (or the first point) to the end: how the branch came to its last point.
+
+    The sign of the last step in the parameter cannot orient the walk on: where single
+    shooting stops at a fold (a sharp end of Fig. 6), the last steps crawl in the
+    parameter with either sign, and the tangent there is orthogonal to it, so the
+    multiple-shooting walk could turn back along the branch it came from (seen at
+    k12 = -0.8316, eta = 2.5706: it retraced the stable branch)."""
+    pts, vals = branch.points, branch.values
+    end = np.r_[pts[-1], vals[-1]]
+    k = len(vals) - 2
+    while k > 0 and np.linalg.norm(end - np.r_[pts[k], vals[k]]) < CHORD_MIN:
+        k -= 1
+    return pts[-1] - pts[k], float(vals[-1] - vals[k])
 
 
 def _return_times(xs, periods, compute) -> np.ndarray:
