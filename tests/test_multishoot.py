@@ -173,23 +173,30 @@ def test_a_remeshed_branch_keeps_to_the_orbits_of_the_fixed_mesh(monkeypatch):
         ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True)
 
 
-def test_the_walk_on_from_single_shooting_follows_the_way_in():
-    # Where single shooting stops at a fold its last steps crawl in eta with either sign,
-    # and the tangent there is orthogonal to eta: multiple shooting must be oriented by the
-    # way the branch came (a chord of at least CHORD_MIN), not by the sign of its last step
-    # (at k12 = -0.8316 the walk turned back along the stable branch from eta = 2.5706).
+def test_the_walk_on_from_single_shooting_does_not_turn_back():
+    # Where single shooting stops at a fold it can cross it and crawl back within 1e-11 in
+    # eta (k12 = -0.8316, eta = 2.5706), so neither the sign of its last step nor its
+    # last tangent says which way is on. A probe decides by the leading multiplier: a
+    # probe that moves it back towards its value WAY_BACK before the end turns back.
     from types import SimpleNamespace
 
     from stickslip_fast.bifurcation.multishoot import MESH_LIMIT
     from stickslip_fast.bifurcation.multishoot_branch import continue_multiple, ms_start
-    from stickslip_fast.bifurcation.orbit_branch import CHORD_MIN, _chord_in
+    from stickslip_fast.bifurcation.orbit_branch import WAY_BACK, _turns_back
 
     pts = np.array([[0.3, 0.0, 0.2, 0.0], [0.2, 0.0, 0.1, 0.0], [0.1, 0.0, 0.05, 0.0],
                     [0.1 + 1e-12, 0.0, 0.05, 0.0]])  # fmt: skip
-    came = SimpleNamespace(points=pts, values=np.array([2.2, 2.1, 2.0, 2.0 + 1e-12]))
-    d_state, d_lam = _chord_in(came)  # the crawl is shorter than CHORD_MIN: skipped
-    assert CHORD_MIN > 1e-12 and d_lam < 0
-    np.testing.assert_allclose(d_state, pts[-1] - pts[1])
+    # came up to the fold (mu 0.5 -> 0.9), crossed it (1.0002) and crawled back (0.9995)
+    came = SimpleNamespace(points=pts, values=np.array([2.2, 2.1, 2.0, 2.0 + 1e-12]),
+                           multipliers=np.array([[0.5], [0.9], [1.0002], [0.9995]]))  # fmt: skip
+    assert WAY_BACK > 1e-12
+
+    def probe(mu):
+        return SimpleNamespace(values=np.array([2.0, 2.0]), multipliers=np.array([[0.9995], [mu]]))
+
+    assert _turns_back(came, probe(0.998))  # towards 0.9, the value before the crawl
+    assert not _turns_back(came, probe(1.002))  # onwards, past the fold
+    assert not _turns_back(came, probe(0.9995))  # not moved: the way on is kept
     # on the model: with direction +1 in eta but a chord down in eta, the walk goes down
     s = ssf.System.preset("asymmetric", eta=2.0)
     orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)

@@ -101,10 +101,10 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
     ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
     segments are cut again (:func:`.multishoot.remesh`) wherever one amplifies by more
     than :data:`.multishoot.REMESH_LIMIT`; the branch is then followed in pieces, one per
-    mesh (:func:`walk_pieces`). ``chord``: (d_state, d_lambda), the way the branch came
-    to x0 (a section point's change and the parameter's); when given, the first tangent
-    is oriented along it instead of by ``direction`` in lambda, which is undefined at a
-    fold."""
+    mesh (:func:`walk_pieces`). ``chord``: (d_state, d_lambda), the way the branch goes on
+    from x0 (a section point's change and the parameter's: the tangent of the walk that
+    came to x0); when given, the first tangent is oriented along it instead of by
+    ``direction`` in lambda, which is undefined at a fold."""
     settings = [(tol, rtol, atol, ds_min)]
     if sharp_ends:
         for stage in stages:
@@ -231,7 +231,7 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         evaluate, system_at, shooting_at = ms_evaluator(system0, param, mesh, rtol, atol,
                                                         kw["fd_step"])  # fmt: skip
         ms = shooting_at(x_start[-1], None)
-        if orient is None and kw.get("chord") is not None:  # the first piece: the way in
+        if orient is None and kw.get("chord") is not None:  # the first piece: the way on
             d_state, d_lam = kw["chord"]
             orient = np.zeros_like(x_start)
             orient[: ms.n - 1] = np.asarray(d_state)[ms.mask]

@@ -265,9 +265,10 @@ def continue_orbit(
     if shooting == "multiple":
         return _continue_multiple_from(orbit, param, (lo, hi), direction, int(segments), kw,
                                        bool(remesh))  # fmt: skip
-    branch = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
+    branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
     if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
-        branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw, bool(remesh))
+        branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw, bool(remesh),
+                                 way_on)  # fmt: skip
     return branch
 
 
@@ -324,9 +325,10 @@ def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
 
 
 def _go_on_multiple(
-    branch: Branch, orbit: Orbit, bounds, segments: int, kw, remesh: bool = False
+    branch: Branch, orbit: Orbit, bounds, segments: int, kw, remesh: bool = False, way_on=None
 ) -> Branch:
-    """``branch`` continued by multiple shooting from its last point (shooting="auto")."""
+    """``branch`` continued by multiple shooting from its last point (shooting="auto"),
+    along ``way_on`` (the single-shooting walk's last tangent) or against it."""
     if branch.values.size < 2 or kw["max_points"] - branch.values.size < 2:
         return branch
     # the tightest tolerances the single-shooting branch used (the last sharp-end stage)
@@ -347,34 +349,44 @@ def _go_on_multiple(
     kw2 = dict(kw, tol=tol, rtol=rtol, atol=atol, ds=max(kw["ds_min"], ds_min * 100),
                ds_min=ds_min, max_points=kw["max_points"] - branch.values.size + 1)  # fmt: skip
     kw2["ds"] = min(kw2["ds"], kw["ds_max"])
+    way_on = way_on or (np.zeros(branch.points.shape[1]), direction)
+    # A probe of a few points first: where single shooting stopped in a crawl at a fold,
+    # its last tangent can point back along the branch it came by (k12 = -0.8316, eta =
+    # 2.5706); the leading multiplier tells: onwards it moves away from its values before.
+    probe = continue_multiple(system, param, orbit.period, x0, direction, bounds,
+                              segments=mesh, stages=(), remesh=False, chord=way_on,
+                              **dict(kw2, max_points=PROBE_POINTS))  # fmt: skip
+    if _turns_back(branch, probe):
+        way_on, direction = (-way_on[0], -way_on[1]), -direction
     second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
-                               segments=mesh, stages=(), remesh=remesh,
-                               chord=_chord_in(branch), **kw2)  # fmt: skip
+                               segments=mesh, stages=(), remesh=remesh, chord=way_on,
+                               **kw2)  # fmt: skip
     second.system = orbit.system
     return append_branch(branch, second, f"single shooting: {branch.status}")
 
 
-#: The chord that orients multiple shooting where single shooting stopped spans at
-#: least this distance in (section point, parameter): longer than the crawl of a
-#: precision limit (steps of ds_min and below), so its direction is the branch's.
-CHORD_MIN = 1e-6
+#: Points of the multiple-shooting probe that checks the way on (:func:`_go_on_multiple`),
+#: and how far back along the branch it compares with (section point and parameter).
+PROBE_POINTS, WAY_BACK = 3, 1e-6
 
 
-def _chord_in(branch: Branch) -> tuple[np.ndarray, float]:
-    """(d_state, d_lambda) from the last point at least :data:`CHORD_MIN` before the end
-    (or the first point) to the end: how the branch came to its last point.
+def _lead(mults: np.ndarray) -> np.ndarray:
+    """The largest multiplier modulus of every point (NaN-safe)."""
+    return np.nanmax(np.where(np.isfinite(np.abs(mults)), np.abs(mults), np.nan), axis=1)
 
-    The sign of the last step in the parameter cannot orient the walk on: where single
-    shooting stops at a fold (a sharp end of Fig. 6), the last steps crawl in the
-    parameter with either sign, and the tangent there is orthogonal to it, so the
-    multiple-shooting walk could turn back along the branch it came from (seen at
-    k12 = -0.8316, eta = 2.5706: it retraced the stable branch)."""
-    pts, vals = branch.points, branch.values
-    end = np.r_[pts[-1], vals[-1]]
-    k = len(vals) - 2
-    while k > 0 and np.linalg.norm(end - np.r_[pts[k], vals[k]]) < CHORD_MIN:
+
+def _turns_back(branch: Branch, probe: Branch) -> bool:
+    """True where the probe's leading multiplier moves back towards its value at the
+    branch's last point :data:`WAY_BACK` or more before the end (section point and
+    parameter), which lies before any crawl of the end (at k12 = -0.8316 single shooting
+    crossed the fold and crawled back within 1e-11 in eta): the probe is retracing."""
+    end = np.r_[branch.points[-1], branch.values[-1]]
+    k = len(branch.values) - 2
+    while k > 0 and np.linalg.norm(end - np.r_[branch.points[k], branch.values[k]]) < WAY_BACK:
         k -= 1
-    return pts[-1] - pts[k], float(vals[-1] - vals[k])
+    lead = _lead(branch.multipliers)
+    moved = _lead(probe.multipliers)[-1] - lead[-1]
+    return bool(abs(moved) > 1e-9 and np.sign(moved) == np.sign(lead[k] - lead[-1]))
 
 
 def _return_times(xs, periods, compute) -> np.ndarray:
@@ -410,8 +422,12 @@ def _cut_at_period_jump(xs, mults, T, bifs, status):
 
 
 def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_max, max_points,
-                     tol, rtol, atol, fd_step, stick_events, sharp_ends) -> Branch:  # fmt: skip
-    """continue_orbit with shooting="single" (its arguments)."""
+                     tol, rtol, atol, fd_step, stick_events, sharp_ends):  # fmt: skip
+    """continue_orbit with shooting="single" (its arguments): (the Branch, its way on).
+
+    The way on is (d_state, d_lambda): the walk's unit tangent at its last point, oriented
+    onwards (by continuity along the branch), in the full state (0 at the section's
+    coordinate) and the parameter; None if the walk accepted no point."""
     system0 = orbit.system
     p = orbit.period
     evaluate, full, system_at, periods = _orbit_evaluator(system0, param, p, rtol, atol, fd_step)
@@ -439,9 +455,15 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
                 cur = nxt
     x0 = np.r_[orbit.points[0][mask], lam0]
     evaluate(x0)
+    last = {}
+
+    def keep_tangent(x, data, walk):  # the tangent at each accepted point, oriented onwards
+        last["t"] = walk.t.copy()
+        return False
+
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, jump=jump, refine=refine,
+        max_points=max_points, tol=tol, jump=jump, refine=refine, stop=keep_tangent,
     )  # fmt: skip
     T = _return_times(
         xs, periods, lambda x: return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)[2][-1]
@@ -457,6 +479,11 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
         stick_count, stick_time = _stick_events(xs, T, system_at, full, evaluate, periods, tol,
                                                 bifs)  # fmt: skip
         bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
+    way_on = None
+    if "t" in last:
+        d_state = np.zeros(system0.n_state)
+        d_state[mask] = last["t"][:-1]
+        way_on = (d_state, float(last["t"][-1]))
     return Branch(
         system=system0,
         param=param,
@@ -470,4 +497,4 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
         status=status,
         stick_count=stick_count,
         stick_time=stick_time,
-    )
+    ), way_on
