@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
@@ -215,9 +214,10 @@ def follow_curve(
     if not ok:
         return None, None, [], "start-failed", x0
     evaluate = augmented(base, n_z, kind, b, c, h, 1.0 / max(float(np.linalg.norm(DF[-1])), 1e-300))
-    after_step = (lambda x: refresh_borders(evaluate, x)) if borders == "adapt" else None
+    if borders == "adapt":
+        evaluate.after_step = lambda x: refresh_borders(evaluate, x)
     return run_curve(evaluate, x0, direction, bounds2, tests=tests or map_curve_tests(kind),
-                     after_step=after_step, **settings)  # fmt: skip
+                     **settings)  # fmt: skip
 
 
 def _never_stop(after_step):
@@ -246,13 +246,12 @@ def run_curve(
     tests: Callable = curve_tests,
     spectrum: Callable | None = None,
     locate_tol: float = 1e-9,
-    after_step: Callable[[np.ndarray], Any] | None = None,
 ):
     """Continue the augmented system ``evaluate`` from x0 (corrected first at fixed l2, the
     last coordinate; l1 is the one before it) and name the codim-2 points.
 
-    ``after_step(x)`` is called at every accepted point, after its tests (the borders'
-    refresh of :func:`follow_curve`).
+    ``evaluate.after_step(x)``, where the evaluator has one (not None), is called at every
+    accepted point after its tests (the borders' refresh of :func:`follow_curve`).
 
     Sign changes of "turn-1"/"turn-2" are a "cusp" where both parameter components of the
     tangent are below :data:`CUSP_SPEED`, else "turn-2" is an "extremum" (and "turn-1"
@@ -268,7 +267,7 @@ def run_curve(
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x_start, direction, bounds2, ds=ds, ds_min=ds_min, ds_max=ds_max,
         max_points=max_points, tol=tol, locate_tol=locate_tol, tests=tests,
-        spectrum=spectrum, stop=_never_stop(after_step),
+        spectrum=spectrum, stop=_never_stop(getattr(evaluate, "after_step", None)),
     )  # fmt: skip
     codim2 = []
     for name, _, index, x in bifs:

@@ -252,9 +252,9 @@ def follow_hopf_curve(base: Callable, x0: np.ndarray, direction: float,
     system = hopf_system(base, x0, h, lyap_step)
     if system is None:
         return None, None, [], "start-failed", x0
-    after_step = system.refresh if borders == "adapt" else None
+    system.after_step = system.refresh if borders == "adapt" else None
     return run_curve(system, x0, direction, bounds2, tests=hopf_tests, spectrum=hopf_spectrum,
-                     after_step=after_step, **settings)  # fmt: skip
+                     **settings)  # fmt: skip
 
 
 def follow_equilibrium_fold(base: Callable, x0: np.ndarray, direction: float,

@@ -172,10 +172,11 @@ def follow_ns_curve(
         return None, None, [], "start-failed"
     scale = 1.0 / max(float(np.linalg.norm(DF[-2:])), 1e-300)
     evaluate = ns_augmented(base, n_z, b, c, h, scale)
-    after_step = (lambda x: refresh_borders(evaluate, x)) if borders == "adapt" else None
+    if borders == "adapt":
+        evaluate.after_step = lambda x: refresh_borders(evaluate, x)
     xs, mults, codim2, status, _ = run_curve(
         evaluate, x0t, direction, bounds2, tests=ns_tests,
-        spectrum=lambda At: _sorted_eigs(At[0]), after_step=after_step, **settings,
+        spectrum=lambda At: _sorted_eigs(At[0]), **settings,
     )  # fmt: skip
     if xs is None:
         return None, None, [], status
