@@ -353,9 +353,10 @@ def _go_on_multiple(
     # A probe of a few points first: where single shooting stopped in a crawl at a fold,
     # its last tangent can point back along the branch it came by (k12 = -0.8316, eta =
     # 2.5706); the leading multiplier tells: onwards it moves away from its values before.
+    kw_probe = dict(kw2, max_points=PROBE_POINTS, stick_events=False)
     probe = continue_multiple(system, param, orbit.period, x0, direction, bounds,
                               segments=mesh, stages=(), remesh=False, chord=way_on,
-                              **dict(kw2, max_points=PROBE_POINTS))  # fmt: skip
+                              **kw_probe)  # fmt: skip
     if _turns_back(branch, probe):
         way_on, direction = (-way_on[0], -way_on[1]), -direction
     second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
@@ -365,9 +366,8 @@ def _go_on_multiple(
     return append_branch(branch, second, f"single shooting: {branch.status}")
 
 
-#: Points of the multiple-shooting probe that checks the way on (:func:`_go_on_multiple`),
-#: and how far back along the branch it compares with (section point and parameter).
-PROBE_POINTS, WAY_BACK = 3, 1e-6
+#: Points of the probe that checks the way on (:func:`_go_on_multiple`), and how far back
+PROBE_POINTS, WAY_BACK = 3, 1e-6  # along the branch it compares (section point, parameter)
 
 
 def _lead(mults: np.ndarray) -> np.ndarray:
