@@ -77,6 +77,10 @@ def continue_bifurcation(
     """Follow a fold, period-doubling or Neimark-Sacker point of periodic orbits, or a fold
     or Hopf point of equilibria, in a second parameter.
 
+    The curve is a minimally augmented system whose borders follow the null vectors:
+    where these have turned more than 60 degrees from the borders, the borders are
+    taken again at the last point (docs/orbits.md, "Borders along long curves").
+
     Parameters
     ----------
     branch : Branch
