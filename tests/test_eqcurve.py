@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from turning_forms import plane_turn
 
 import stickslip_fast as ssf
 from stickslip_fast.bifurcation.hopfcurve import (
@@ -224,12 +225,7 @@ def turning_hopf(x):
     # Q turns the (u1, u2) plane into (u3, u4) by phi(th), a quarter turn by th = 1.5,
     # where the kernel of J^2 + I is orthogonal to the start's borders
     y, a, th = x[:4], x[4], x[5]
-    t = min(max(th / 1.5, 0.0), 1.0)
-    phi = 0.5 * np.pi * (3 * t * t - 2 * t**3)
-    dphi = np.pi * 2 * t * (1 - t) if 0.0 < t < 1.0 else 0.0
-    c, s, eye2 = np.cos(phi), np.sin(phi), np.eye(2)
-    Q = np.block([[c * eye2, -s * eye2], [s * eye2, c * eye2]])
-    dQ = np.block([[-s * eye2, -c * eye2], [c * eye2, -s * eye2]]) * dphi
+    Q, dQ = plane_turn(th)
     u = Q.T @ y
     mu, r2 = a - 0.3 * np.sin(th), u[0] ** 2 + u[1] ** 2
     g = np.array([mu * u[0] - u[1] - u[0] * r2, u[0] + mu * u[1] - u[1] * r2,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from turning_forms import quarter_turn
 
 from stickslip_fast.bifurcation.arclength import pseudo_arclength
 from stickslip_fast.bifurcation.foldcurve import follow_curve
@@ -175,9 +176,7 @@ def rotating_fold(x):
     # a = 0.3 sin(th), z = 0, and its null vector R e1 turns by phi(th), a quarter turn by
     # th = 1.5, where it stays: orthogonal to the start's borders from there on
     z, a, th = x[:2], x[2], x[3]
-    t = min(max(th / 1.5, 0.0), 1.0)
-    phi = 0.5 * np.pi * (3 * t * t - 2 * t**3)
-    dphi = np.pi * 2 * t * (1 - t) if 0.0 < t < 1.0 else 0.0
+    phi, dphi = quarter_turn(th)
     c, s = np.cos(phi), np.sin(phi)
     R, dR = np.array([[c, -s], [s, c]]), np.array([[-s, -c], [c, -s]])
     u = R.T @ z

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+from turning_forms import plane_turn
 
 from stickslip_fast.bifurcation.arclength import pseudo_arclength
 from stickslip_fast.bifurcation.nscurve import follow_ns_curve
@@ -118,12 +119,8 @@ def turning_ns(x):
     # into the other two coordinates by phi(th), a quarter turn by th = 1.5, where the
     # complex null vector is orthogonal to the start's borders
     z, a, th = x[:4], x[4], x[5]
-    t = min(max(th / 1.5, 0.0), 1.0)
-    phi = 0.5 * np.pi * (3 * t * t - 2 * t**3)
-    dphi = np.pi * 2 * t * (1 - t) if 0.0 < t < 1.0 else 0.0
-    c, s, eye2, zero2 = np.cos(phi), np.sin(phi), np.eye(2), np.zeros((2, 2))
-    Q = np.block([[c * eye2, -s * eye2], [s * eye2, c * eye2]])
-    dQ = np.block([[-s * eye2, -c * eye2], [c * eye2, -s * eye2]]) * dphi
+    Q, dQ = plane_turn(th)
+    eye2, zero2 = np.eye(2), np.zeros((2, 2))
     rot = np.array([[math.cos(NS_ANGLE), -math.sin(NS_ANGLE)],
                     [math.sin(NS_ANGLE), math.cos(NS_ANGLE)]])  # fmt: skip
     r = 1.0 + a - 0.3 * np.sin(th)

@@ -87,7 +87,7 @@ def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray,
     """
     shift = CURVE_KINDS[kind]
     eye = np.eye(n_z)
-    state = dict(b=b, c=c, scale=scale, v=None, w=None, refreshed=0)
+    state = dict(b=b, c=c, scale=scale, v=None, w=None, rows=1)
 
     def evaluate(x):
         ok, G, DG, A = base(x)
@@ -139,8 +139,7 @@ def refresh_borders(evaluate: Callable, x: np.ndarray) -> bool:
     st["scale"] = 1.0
     ok, _, DF, _ = evaluate(x)
     if ok:  # the test function's rows: one (fold, period-doubling), two (NS: Re g, Im g)
-        st["scale"] = 1.0 / max(float(np.linalg.norm(DF[-st.get("rows", 1) :])), 1e-300)
-    st["refreshed"] += 1
+        st["scale"] = 1.0 / max(float(np.linalg.norm(DF[-st["rows"] :])), 1e-300)
     return True
 
 

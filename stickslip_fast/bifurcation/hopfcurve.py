@@ -142,7 +142,6 @@ class HopfSystem:
         self.base, self.n, self.B, self.C, self.h = base, n, B, C, h
         self.lyap_step, self.entries, self.scale = lyap_step, entries, scale
         self.last = None  # (V, W) of the last evaluation, for refresh()
-        self.refreshed = 0
 
     def refresh(self, x) -> bool:
         """New borders, entries and scales at x (:func:`hopf_system` there) where the
@@ -160,7 +159,6 @@ class HopfSystem:
             return False
         self.B, self.C, self.entries, self.scale = new.B, new.C, new.entries, new.scale
         self.last = None
-        self.refreshed += 1
         return True
 
     def _along(self, xb, u):

@@ -78,7 +78,7 @@ def ns_augmented(base: Callable, n_z: int, b: np.ndarray, c: np.ndarray, h: floa
     (at (z, l1, l2)). Its "A" is the pair (A, theta) (for :func:`ns_tests`). Fails
     where theta is more than :data:`THETA_MARGIN` outside [0, pi]. Borders, scale and
     the last (v, w) live in ``evaluate.state``, as in :func:`.foldcurve.augmented`."""
-    state = dict(b=b, c=c, scale=scale, v=None, w=None, refreshed=0, rows=2)
+    state = dict(b=b, c=c, scale=scale, v=None, w=None, rows=2)
 
     def evaluate(x):
         theta = float(x[n_z])
