@@ -38,7 +38,7 @@ from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .bifurcation.stable_manifold import manifold_seeds, stable_manifold
 from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
-from .model.system import PRESETS, SWEEPABLE, System
+from .model.system import PRESETS, SWEEPABLE, SynchronousStartWarning, System
 
 __version__ = package_version()
 
@@ -46,6 +46,7 @@ __all__ = [
     "System",
     "simulate",
     "SimulationResult",
+    "SynchronousStartWarning",
     "sweep",
     "SweepResult",
     "load_sweep",

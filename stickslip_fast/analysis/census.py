@@ -34,7 +34,7 @@ import numpy as np
 from ..base.messages import plain
 from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
 from ..io import CENSUS_RUN_FIELDS, CensusLayout, read_census, write_census_classification
-from ..model.system import SWEEPABLE, System
+from ..model.system import SWEEPABLE, System, warn_if_synchronous
 from .census_classify import (  # noqa: F401  (re-exported)
     _BACKENDS,
     _ST_EQ,
@@ -87,7 +87,10 @@ starts : array_like (n_starts, n_state), optional
 seed : int
     Seed of the sampler.
 include_zero : bool
-    Make start 0 the zero state (the paper's initial condition).
+    Make start 0 the zero state (the paper's initial condition for one disk).
+    With N >= 2 disks on a DC motor that start keeps the disks identical and
+    can label an in-phase orbit that is unstable across them: a
+    :class:`~stickslip_fast.SynchronousStartWarning` says so (``include_zero=False`` avoids it).
 stop : {"converged", "fixed"}
     Stop rule of every run, as for :func:`simulate`: "converged" (the
     default) ends a run once its Poincare points repeat or it has come to
@@ -168,6 +171,8 @@ def census(
         system, param, values, stop, backend, scheduler, n_workers, track_threshold, identity_tol
     )
     plane = len(names) == 2
+    if starts is None and include_zero:
+        warn_if_synchronous(system, "start 0 (rest, include_zero=True)", stacklevel=2)
     start_arr, box_arr = _check_starts(
         system, n_starts, box, starts, seed, include_zero, names if plane else param,
         axes if plane else axes[0],

@@ -41,7 +41,7 @@ from ..core.trajectory import (
     run_settings,
     unroll_ring,
 )
-from ..model.system import System
+from ..model.system import System, warn_if_synchronous
 
 __all__ = [
     "simulate",
@@ -142,7 +142,10 @@ def simulate(
         correct labels, but with it the returned points include the transient.
     y0 : array_like, optional
         Initial state in ``system.state_names`` order; default zeros
-        (v_b(0) = 0 for the DC motor, as in the paper).
+        (v_b(0) = 0 for the DC motor, as in the paper). With N >= 2 disks on a
+        DC motor the default puts every disk in one state, where they stay: a
+        :class:`~stickslip_fast.SynchronousStartWarning` says so (the paper's Figs. 14-18
+        displace disk 2).
     {method_params}
     max_points : int
         Keep at most this many points: the most recent ones. 0 records none
@@ -169,6 +172,8 @@ def simulate(
         period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
     y_init = system.initial_state(y0)
+    if y0 is None:
+        warn_if_synchronous(system, "the default start y0 (rest)", stacklevel=2)
     if sample_dt is not None:
         sample_dt = check_real("sample_dt", sample_dt)
     bufs = _RunBuffers.allocate(system, s, sample_dt)

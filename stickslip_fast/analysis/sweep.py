@@ -174,7 +174,8 @@ values : array_like or (array_like, array_like)
 t_end, t_transient : float
     Each trajectory runs to ``t_end``; points are kept after ``t_transient``.
 y0 : array_like, optional
-    Initial state (default zeros; v_b(0) = 0 for the DC motor).
+    Initial state (default zeros; v_b(0) = 0 for the DC motor; with N >= 2
+    disks on a DC motor a :class:`~stickslip_fast.SynchronousStartWarning`: see :func:`simulate`).
 mode : {"restart", "continuation", "continuation-both"}
     ``"restart"``: every value starts from ``y0`` (the paper's method).
     ``"continuation"``: values are followed in order along the first

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +28,8 @@ __all__ = [
     "ETA_MIN",
     "ETA_MAX",
     "dc_motor_constants",
+    "SynchronousStartWarning",
+    "warn_if_synchronous",
 ]
 
 DRIVES = ("constant", "dc-motor")
@@ -295,6 +298,45 @@ class System:
         if not np.all(np.isfinite(y)):
             raise ValueError("y0 must be finite")
         return y.copy()
+
+    def synchronous_start(self, y: np.ndarray) -> bool:
+        """Whether ``y`` starts every disk in disk 1's state on a shared DC motor (N >= 2).
+
+        The disks are identical and the model treats each alike, so disks started
+        alike stay alike to the last bit: such a run sees only the synchronous
+        (in-phase) subspace, whatever its stability across the disks. On a constant
+        belt the disks are uncoupled and each simply follows its own attractor.
+        """
+        if not self.is_dc_motor or self.n_oscillators < 2:
+            return False
+        disks = np.asarray(y, dtype=float)[: 4 * self.n_oscillators].reshape(-1, 4)
+        return bool(np.all(disks == disks[0]))
+
+
+class SynchronousStartWarning(UserWarning):
+    """N >= 2 disks on one DC motor start in one state, so the run stays in phase.
+
+    The run then explores only the invariant synchronous subspace: its period and
+    status are right for that motion, but an in-phase orbit can be unstable across
+    the disks (e.g. the symmetric set at eta = 5: leading multiplier 1.09), so the
+    slightest difference between the disks would leave it. Give the disks
+    different starts (the paper's Figs. 14-18 do) or check the orbit's multipliers
+    with :func:`~stickslip_fast.find_orbit`.
+    """
+
+
+def warn_if_synchronous(system: System, what: str, stacklevel: int) -> None:
+    """Warn (:class:`SynchronousStartWarning`) if ``system``'s default start, the zero
+    state, puts its disks alike on a shared DC motor. ``what`` names the start."""
+    if system.synchronous_start(system.initial_state(None)):
+        warnings.warn(
+            f"{what} puts all {system.n_oscillators} disks in the same state on one DC "
+            "motor, so they stay identical to the last bit and the result describes in-phase "
+            "motion only, which can be unstable across the disks; give the disks different "
+            "starts (y0), or check the orbit's multipliers with find_orbit",
+            SynchronousStartWarning,
+            stacklevel=stacklevel + 1,
+        )
 
 
 def dc_motor_constants(
