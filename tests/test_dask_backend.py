@@ -141,12 +141,9 @@ def test_tasks_do_not_compile_and_use_one_numba_thread(cluster):
           mode="continuation-both", **KW)  # fmt: skip
 
     def overloads():
-        from stickslip_fast.core.sweep_kernels import continuation_chunk, sweep_chunk
+        from stickslip_fast.core.sweep_kernels import run_lane
 
-        return {
-            "sweep_chunk": len(sweep_chunk.overloads),
-            "continuation_chunk": len(continuation_chunk.overloads),
-        }
+        return {"run_lane": len(run_lane.overloads)}
 
     # no task compiled a new specialisation after the warm-up
     assert client.run(overloads) == {a: w["overloads"] for a, w in info.items()}

@@ -57,8 +57,8 @@ def _units(
     todo = np.flatnonzero(~done.reshape(-1))
     for a in range(0, todo.size, chunk):
         flat = todo[a : a + chunk]
-        # interleave over the threads, whose share of a prange is contiguous: each
-        # thread gets pairs from the whole unit (costs vary smoothly with the value)
+        # interleave over the threads: each thread's share of the unit's lanes then
+        # comes from the whole unit (costs vary smoothly with the value)
         flat = np.concatenate([flat[t::nthreads] for t in range(nthreads)])
         vi, si = np.divmod(flat, n_s)
         yield _Unit(

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..base.cache_guard import fingerprint
 from ..core.settings import Settings
-from ..core.sweep_kernels import continuation_chunk, sweep_chunk
+from ..core.sweep_kernels import run_lane
 from ..model.system import System
 from .local import compute_continuation_chunk, compute_restart_chunk
 
@@ -128,10 +128,7 @@ def warm_up(numba_threads: int | None = None) -> dict[str, Any]:
         "fingerprint": fingerprint(),
         "pid": os.getpid(),
         "numba_threads": threads,
-        "overloads": {
-            "sweep_chunk": len(sweep_chunk.overloads),
-            "continuation_chunk": len(continuation_chunk.overloads),
-        },
+        "overloads": {"run_lane": len(run_lane.overloads)},
     }
 
 

@@ -183,8 +183,8 @@ SMALL_N_MAX = 1
 def small_shape(n_osc: int, dc: bool) -> tuple:
     """The compile-time token of a :class:`StickSlipSmall`: ``(0,) * N + (0.0,) * dc``.
 
-    Only its type matters. It is a flat tuple of scalars because the kernels
-    pass it into ``prange`` bodies, which take tuples of scalars only.
+    Only its type matters. It is a flat tuple of scalars (the sweep kernels
+    used to pass it into ``prange`` bodies, which take tuples of scalars only).
     """
     return (0,) * int(n_osc) + (0.0,) * int(bool(dc))
 

@@ -6,8 +6,11 @@ the per-value outputs the result files store (status ``ST_NOT_COMPUTED`` until c
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
+import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..base.status import ST_NOT_COMPUTED, ST_OK, ST_UNSETTLED
 from ..model.params import N_PARAMS
@@ -18,7 +21,6 @@ from .problems import (
 from .steppers import alloc_workspace
 from .trajectory import (
     _JIT,
-    _PJIT,
     NO_ABORT,
     RunSettings,
     _all_finite,
@@ -106,7 +108,32 @@ def _lane_dispatch(
 
 
 @njit(**_JIT)
-def _outputs(nv: int, max_points: int, n: int):
+def run_lane(
+    method, lane, n_lanes, chain, lane_len, y0s, params, n_osc, dc, variant, rs, max_points,
+    points, t_points, ints, t_conv, final_state, abort,
+):  # fmt: skip
+    """One lane of a chunk (the compiled entry point that :func:`_run_lanes` schedules).
+
+    Restart (``chain`` 0): lane k runs values k, k + n_lanes, ... Chains
+    (``chain`` 1): lane k runs values k * lane_len ... (k + 1) * lane_len - 1
+    in order, each from the previous final state. Each lane writes only its own
+    values' rows of the outputs.
+    """
+    nv = params.shape[0]
+    first = lane
+    stride = n_lanes
+    count = (nv - lane + stride - 1) // stride
+    if chain:
+        first = lane * lane_len
+        stride = np.int64(1)
+        count = lane_len
+    _lane_dispatch(
+        method, first, stride, count, y0s, chain, params, n_osc, dc, variant, rs, max_points,
+        points, t_points, ints, t_conv, final_state, abort,
+    )  # fmt: skip
+
+
+def _outputs(nv: int, max_points: int, n: int) -> tuple:
     points = np.full((nv, max_points, n), np.nan)
     t_points = np.full((nv, max_points), np.nan)
     ints = np.zeros((nv, 6), dtype=np.int64)
@@ -116,34 +143,35 @@ def _outputs(nv: int, max_points: int, n: int):
     return points, t_points, ints, t_conv, final_state
 
 
-@njit(**_PJIT)
-def _parallel_lanes(
-    method, n_lanes, chain, lane_len, y0s, params, n_osc, dc, variant, rs, max_points, points,
-    t_points, ints, t_conv, final_state, abort,
-):  # fmt: skip
-    """The one ``prange`` loop of both chunk kernels (one parallel compile per variant).
+def _run_lanes(n_lanes: int, threads: int, args: tuple, outputs: tuple, abort) -> None:
+    """Run lanes 0 .. n_lanes - 1 of :func:`run_lane` on ``threads`` threads.
 
-    Restart (``chain`` 0): lane k runs values k, k + n_lanes, ... Chains
-    (``chain`` 1): lane k runs values k * lane_len ... (k + 1) * lane_len - 1
-    in order, each from the previous final state.
+    The lanes are scheduled here, in Python threads, not by a ``prange`` loop:
+    :func:`run_lane` is compiled with ``nogil=True``, so the threads run in
+    parallel, and a parallel loop around the driver compiled it twice more
+    (the loop body and the function around it: ~15 s of a first sweep's ~56 s;
+    docs/performance.md, "The first run"). Each value is computed by the same
+    sequential code whichever thread runs it, so results do not depend on
+    ``threads``.
     """
-    nv = params.shape[0]
-    for lane in prange(n_lanes):
-        k = np.int64(lane)  # the prange index may be unsigned: keep index arithmetic int64
-        first = k
-        stride = np.int64(n_lanes)
-        count = (nv - k + stride - 1) // stride
-        if chain:
-            first = k * lane_len
-            stride = np.int64(1)
-            count = np.int64(lane_len)
-        _lane_dispatch(
-            method, first, stride, count, y0s, chain, params, n_osc, dc, variant, rs, max_points,
-            points, t_points, ints, t_conv, final_state, abort,
+    method, chain, lane_len, y0s, params, n_osc, dc, variant, rs, max_points = args
+
+    def lane(k: int) -> None:
+        run_lane(
+            method, np.int64(k), np.int64(n_lanes), chain, lane_len, y0s, params, n_osc, dc,
+            variant, rs, max_points, *outputs, abort,
         )  # fmt: skip
 
+    threads = max(1, min(int(threads), n_lanes))
+    if threads == 1:
+        for k in range(n_lanes):
+            lane(k)
+        return
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="stickslip-lane") as pool:
+        for future in [pool.submit(lane, k) for k in range(n_lanes)]:
+            future.result()
 
-@njit(**_JIT)
+
 def sweep_chunk(
     method: int,
     y0: np.ndarray,
@@ -155,7 +183,7 @@ def sweep_chunk(
     max_points: int,
     lanes: int,
     abort: np.ndarray = NO_ABORT,
-):
+) -> tuple:
     """Restart mode: one independent trajectory from ``y0`` per row of ``params``.
 
     ``params`` is (n_values, N_PARAMS); ``y0`` is one start (n_state,) for all
@@ -169,35 +197,26 @@ def sweep_chunk(
     was set); callers must not store it.
     """
     nv = params.shape[0]
-    y0s = _starts(y0, nv)
-    n = y0s.shape[1]
-    points, t_points, ints, t_conv, final_state = _outputs(nv, max_points, n)
-    # prange splits its range into contiguous blocks, one per thread. Neighbouring
-    # values cost about the same (a block of cheap equilibria next to a block of
-    # long orbits), so each thread takes an interleaved lane of values instead:
-    # pass lanes = the thread count. Results do not depend on it.
-    lanes = max(1, min(nv, lanes))
-    # np.int64(...), not literals: literal arguments would compile a second copy
-    _parallel_lanes(
-        method, lanes, np.int64(0), np.int64(0), y0s, np.ascontiguousarray(params), n_osc, dc, variant, rs, max_points, points,
-        t_points, ints, t_conv, final_state, abort,
-    )  # fmt: skip
-    return points, t_points, ints, t_conv, final_state
+    y0s = _starts(np.asarray(y0, dtype=float), nv)
+    outputs = _outputs(nv, max_points, y0s.shape[1])
+    # Neighbouring values cost about the same (a block of cheap equilibria next
+    # to a block of long orbits), so each thread takes an interleaved lane of
+    # values: lanes = the thread count. Results do not depend on it.
+    lanes = max(1, min(nv, int(lanes)))
+    # np.int64(...), not Python ints: the compiled entry is typed once
+    args = (np.int64(method), np.int64(0), np.int64(0), y0s, np.ascontiguousarray(params),
+            n_osc, dc, variant, rs, max_points)  # fmt: skip
+    _run_lanes(lanes, lanes, args, outputs, abort)
+    return outputs
 
 
-@njit(**_JIT)
-def _starts(y0, nv):
+def _starts(y0: np.ndarray, nv: int) -> np.ndarray:
     """One start per value: broadcast a single (n_state,) start."""
     if y0.ndim == 2:
         return np.ascontiguousarray(y0.reshape(-1, y0.shape[-1]))
-    out = np.empty((nv, y0.shape[-1]))
-    for v in range(nv):
-        for i in range(y0.shape[-1]):
-            out[v, i] = y0.flat[i]
-    return out
+    return np.ascontiguousarray(np.broadcast_to(y0.reshape(-1), (nv, y0.shape[-1])))
 
 
-@njit(**_JIT)
 def continuation_chunk(
     method: int,
     y0: np.ndarray,
@@ -209,30 +228,27 @@ def continuation_chunk(
     rs: RunSettings,
     max_points: int,
     abort: np.ndarray = NO_ABORT,
-):
+) -> tuple:
     """Continuation mode: chains of values, each starting from the previous final state.
 
     ``params`` is (n_chains, length, N_PARAMS) and ``y_starts`` (n_chains,
-    n_state) the state each chain starts from. Chains run in parallel; within
-    a chain the values run in order. After a value that failed (nonfinite,
-    step-underflow, max-steps, error, interrupted) the next value starts from
-    the last good final state of the chain (``y_starts[c]`` if there is none);
-    ``y0`` is unused and kept for the call signature. Outputs as
-    :func:`sweep_chunk`, with a leading chain axis.
+    n_state) the state each chain starts from. Chains run in parallel (on
+    ``numba.get_num_threads()`` threads); within a chain the values run in
+    order. After a value that failed (nonfinite, step-underflow, max-steps,
+    error, interrupted) the next value starts from the last good final state of
+    the chain (``y_starts[c]`` if there is none); ``y0`` is unused and kept for
+    the call signature. Outputs as :func:`sweep_chunk`, with a leading chain axis.
     """
-    nc = params.shape[0]
-    nl = params.shape[1]
+    nc, nl = params.shape[0], params.shape[1]
     n = y_starts.shape[1]
-    flat = params.reshape(nc * nl, params.shape[2])
-    points, t_points, ints, t_conv, final_state = _outputs(nc * nl, max_points, n)
+    flat = np.ascontiguousarray(params.reshape(nc * nl, params.shape[2]))
+    outputs = _outputs(nc * nl, max_points, n)
     starts = np.empty((nc * nl, n))
-    for c in range(nc):
-        for i in range(n):
-            starts[c * nl, i] = y_starts[c, i]
-    _parallel_lanes(
-        method, nc, np.int64(1), np.int64(nl), starts, np.ascontiguousarray(flat), n_osc, dc, variant, rs,
-        max_points, points, t_points, ints, t_conv, final_state, abort,
-    )  # fmt: skip
+    starts[::nl] = y_starts  # only each chain's first row is read
+    args = (np.int64(method), np.int64(1), np.int64(nl), starts, flat, n_osc, dc, variant, rs,
+            max_points)  # fmt: skip
+    _run_lanes(nc, numba.get_num_threads(), args, outputs, abort)
+    points, t_points, ints, t_conv, final_state = outputs
     return (
         points.reshape(nc, nl, max_points, n),
         t_points.reshape(nc, nl, max_points),

@@ -5,7 +5,7 @@ methods through :func:`driver.drive`, with a :class:`driver.PoincareObserver`
 (points at the local minima of x1 in a ring buffer, optional uniform samples)
 and classifies the run. :func:`~.sweep_kernels.sweep_chunk` and
 :func:`~.sweep_kernels.continuation_chunk` (in :mod:`.sweep_kernels`) run many
-trajectories in one shared ``prange`` loop. All of them call the same
+trajectories in lanes run on threads (one compiled entry, ``run_lane``). All of them call the same
 :func:`_run`, so a sweep value equals the corresponding simulate() bit for bit.
 
 Kernel rules: nothing here raises (``error_model="numpy"``, no bounds that can
@@ -80,9 +80,6 @@ AUTO_TOKEN = (True,)
 
 
 _JIT = JIT
-
-
-_PJIT = dict(parallel=True, cache=True, nogil=True, error_model="numpy")
 
 
 # slots of the integer and float statistics arrays; I_TO_STIFF ... for method="auto"
