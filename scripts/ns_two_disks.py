@@ -6,7 +6,10 @@ The asymmetric set with two disks on a DC motor, from the paper's start for Figs
 bifurcations, then follows each Neimark-Sacker point found in a second parameter
 (``--param2``, default k12) with ``continue_bifurcation``, and writes the branches and
 curves as HDF5 files (``ssf.Branch.from_hdf5``, ``ssf.Curve.from_hdf5``) and a JSON
-summary into ``--out``. Numbers and what they mean: docs/orbits.md, "The model".
+summary into ``--out``. Each curve is checked at a quarter, half and all of its length
+against a one-parameter continuation in eta at that point's second parameter (the NS
+point it finds minus the curve's eta). Numbers and what they mean: docs/orbits.md,
+"The model".
 
     PYTHONPATH=. python3 scripts/ns_two_disks.py [--out DIR] [--param2 k12]
         [--bounds2 -0.95 -0.6] [--max-points 60]
@@ -67,6 +70,31 @@ def _curve(branch, bif, param2: str, bounds2, max_points: int, direction: float)
     return curve
 
 
+def _check(curve, fractions=(0.25, 0.5, 1.0)) -> list:
+    """The curve against one-parameter NS points: at a few of its points, the orbit at
+    (eta + 2e-5, param2) continued in eta at fixed param2; its NS point minus the curve's eta."""
+    out = []
+    values, points = np.asarray(curve.values), np.asarray(curve.points)
+    for f in fractions:
+        j = min(len(values) - 1, int(round(f * (len(values) - 1))))
+        eta_j, p2_j = float(values[j, 0]), float(values[j, 1])
+        system = curve.system.replace(**{curve.param2: p2_j, "eta": eta_j + 2e-5})
+        orbit = ssf.find_orbit(system, points[j], period=curve.period)
+        if not orbit.converged:
+            out.append((p2_j, eta_j, None))
+            continue
+        branch = ssf.continue_orbit(orbit, "eta", (eta_j - 2e-5, eta_j + 2e-5), direction=-1,
+                                    max_points=30, stick_events=False, ds=2e-6, ds_max=5e-6)  # fmt: skip
+        found = [b.value for b in branch.bifurcations if b.kind == "neimark-sacker"]
+        out.append((p2_j, eta_j, found[0] - eta_j if found else None))
+        # None where the orbit at eta + 2e-5 is not this branch's (the upper curve runs
+        # 1e-7 beside a fold: past it, Newton finds another orbit)
+        print(f"    check at {curve.param2} = {p2_j:.6f} (orbit at eta + 2e-5 "
+              f"{'stable' if orbit.stable else 'unstable'}): one-parameter NS minus curve "
+              f"{out[-1][2]}", flush=True)  # fmt: skip
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("out/ns_two_disks"))
@@ -91,12 +119,14 @@ def main(argv=None) -> int:
                                direction)  # fmt: skip
                 name = f"ns_{bif.value:.6f}_{args.param2}_{'up' if direction > 0 else 'down'}.h5"
                 curve.to_hdf5(args.out / name)
+                checks = _check(curve)
                 summary["curves"].append(
                     {"from": float(bif.value), "direction": direction, "status": curve.status,
                      "n": len(curve.values), "first": curve.values[0].tolist(),
                      "last": curve.values[-1].tolist(),
                      "theta": [float(curve.theta[0]), float(curve.theta[-1])],
-                     "codim2": [(p.kind, p.values.tolist()) for p in curve.codim2]}
+                     "codim2": [(p.kind, p.values.tolist()) for p in curve.codim2],
+                     "checks": checks}
                 )  # fmt: skip
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1))
     return 0
