@@ -138,7 +138,11 @@ def time_since_crossing(stop, t: float) -> float:
     return _elapsed(stop.state[S_LAST_CROSSING], t, np.inf)
 
 
-@njit(inline="always", **_JIT)
+# The helpers below are compiled functions of their own, not IR-inlined ones: IR-inlined
+# at each call site (track_rest and _at_rest twice each), Numba copied and re-typed them
+# into stop_now, 4.4 s of a first simulate's compile; as calls, 2.1 s in all, with the
+# warm run unchanged within noise (docs/performance.md, "The first run").
+@njit(**_JIT)
 def _elapsed(since: float, t: float, never: float) -> float:
     """t - since, or ``never`` when ``since`` is unset (NaN)."""
     if math.isnan(since):
@@ -146,7 +150,7 @@ def _elapsed(since: float, t: float, never: float) -> float:
     return t - since
 
 
-@njit(inline="always", **_JIT)
+@njit(**_JIT)
 def _at_rest(stop, y) -> bool:
     tol = stop.equilibrium_tol
     for i in range(stop.n_osc):
@@ -155,7 +159,7 @@ def _at_rest(stop, y) -> bool:
     return True
 
 
-@njit(inline="always", **_JIT)
+@njit(**_JIT)
 def track_rest(stop, t, y) -> bool:
     """Update the start of the current stretch at rest (``S_REST_SINCE``); True if at rest.
 
@@ -190,7 +194,7 @@ def track_rest(stop, t, y) -> bool:
     return True
 
 
-@njit(inline="always", **_JIT)
+@njit(**_JIT)
 def converged_now(stop, obs, t, y) -> bool:
     """STOP_CONVERGED: watch for rest and for repeating points; see :class:`StopRule`."""
     st = stop.state
