@@ -44,13 +44,16 @@ from numba import njit
 from numba.extending import overload
 
 from ..base.jit import JIT, OVERLOAD, is_record, overload_call
-from .problems import problem_f, problem_jac
+from .problems import problem_f
 from .steppers import (
     DENSE_HERMITE,
     DOPRI5_METHOD,
     RODAS5P_METHOD,
     alloc_workspace,
-    rosenbrock_step,
+    erk_accept,
+    erk_init,
+    erk_step,
+    ros_step,
     stepper_accept,
     stepper_dense,
     stepper_dense_kind,
@@ -160,31 +163,23 @@ def _auto_alloc_workspace(method, n):
 
 @njit(inline="always", **_JIT)
 def _erk_step_rho(A, b, b_err, prob, y0, h, K, ytmp, y1, err, y6) -> float:
-    """:func:`.steppers.erk_step` (the same arithmetic) that keeps the sixth stage's
-    argument in ``y6`` and returns Hairer's stiffness estimate h |k7 - k6| / |y1 - y6|."""
+    """:func:`.steppers.erk_step`, then the sixth stage's argument into ``y6`` and Hairer's
+    stiffness estimate h |k7 - k6| / |y1 - y6|.
+
+    ``y6`` is formed again from the stages, in the order the step formed it, so it is
+    the step's own argument to the last bit (and the step keeps one stage loop).
+    """
+    erk_step(A, b, b_err, prob, y0, h, K, ytmp, y1, err)
     s = b.size
-    n = y0.size
-    for st in range(1, s):
-        for i in range(n):
-            acc = 0.0
-            for j in range(st):
-                acc += A[st, j] * K[j, i]
-            ytmp[i] = y0[i] + h * acc
-        if st == s - 2:
-            for i in range(n):
-                y6[i] = ytmp[i]
-        if st == s - 1:
-            for i in range(n):
-                y1[i] = ytmp[i]
-        problem_f(prob, ytmp, K[st])
+    st = s - 2
     num = 0.0
     den = 0.0
-    for i in range(n):
-        e = 0.0
-        for j in range(s):
-            e += b_err[j] * K[j, i]
-        err[i] = h * e
-        dk = K[s - 1, i] - K[s - 2, i]
+    for i in range(y0.size):
+        acc = 0.0
+        for j in range(st):
+            acc += A[st, j] * K[j, i]
+        y6[i] = y0[i] + h * acc
+        dk = K[s - 1, i] - K[st, i]
         dy = y1[i] - y6[i]
         num += dk * dk
         den += dy * dy
@@ -232,9 +227,7 @@ def _auto_init(method, prob, lin, y, ws):
     if _is(method, AutoMethod):
 
         def impl(method, prob, lin, y, ws):
-            problem_f(prob, y, ws.f0)
-            for i in range(y.size):
-                ws.K[0, i] = ws.f0[i]
+            erk_init(prob, y, ws)
             for k in range(ws.flags.size):
                 ws.flags[k] = 0  # Jacobian stale, explicit mode, no counts
             ws.fst[A_H] = 0.0
@@ -255,14 +248,7 @@ def _auto_step(method, prob, lin, y, h, ws):
                     e.A, e.b, e.b_err, prob, y, h, ws.K, ws.ytmp, ws.ynew, ws.err, ws.y6
                 )
                 return True
-            r = method.ros
-            if ws.flags[0] == 0:
-                problem_jac(prob, y, lin)
-                ws.flags[0] = 1
-            return rosenbrock_step(
-                r.gamma, r.a, r.C, r.b, r.b_err, prob, lin, y, ws.f0, h, ws.K, ws.ytmp, ws.ftmp,
-                ws.ynew, ws.err,
-            )  # fmt: skip
+            return ros_step(method.ros, prob, lin, y, h, ws)
 
         return impl
 
@@ -276,12 +262,7 @@ def _auto_accept(method, prob, lin, y, ws, modified):
             ist = ws.flags
             if ist[A_MODE] == 0:
                 ist[A_STEPS_ERK] += 1
-                if modified:
-                    problem_f(prob, y, ws.K[0])
-                else:
-                    last = method.erk.b.size - 1
-                    for i in range(n):
-                        ws.K[0, i] = ws.K[last, i]
+                erk_accept(method.erk, prob, y, ws, modified)
                 hrho = ws.fst[A_HRHO]
                 if hrho > method.stiff_hrho:
                     ist[A_N_STIFF] += 1

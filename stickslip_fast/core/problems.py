@@ -53,7 +53,8 @@ Records
     inlined. The number of tangent vectors stays a run-time value.
 
 Adding a problem: define a namedtuple record, a linear workspace, and an
-``overload`` of each generic function that tests ``instance_class`` (see
+``overload`` of ``problem_f``, ``problem_jac``, ``problem_factor`` and ``problem_solve``
+that tests ``instance_class`` (the error norm and the starting step default; see
 :mod:`stickslip_fast.core.testproblems` and docs/developing.md).
 """
 
@@ -288,143 +289,118 @@ def problem_initial_step(prob, y, f0, rtol, atol, order, work, fwork):  # noqa: 
     """Starting step size."""
 
 
-# -------------------------------------------------------------- StickSlipSmall
-# The model's own functions with literal N and dc. The linear algebra is inlined
+# ------------------------------------------------ StickSlip and StickSlipSmall
+# One overload per generic function serves both model records: the small record's
+# N and belt kind are compile-time literals (closure constants), the generic
+# record's are its fields. For the small record the linear algebra is inlined
 # (w_factor_inline / w_solve_inline): called out of line, each of the eight solves
 # of a Rodas5P step passed seven arrays across a call boundary and cost more than
 # its arithmetic (measured: 2.2 -> 0.83 us per step for N = 1). Inlining the RHS
 # as well gained nothing measurable and costs compile time.
-@overload(problem_f, **_OVL)
-def _small_f(prob, y, out):
-    if _is(prob, StickSlipSmall):
+def _is_model(prob) -> bool:
+    return _is(prob, StickSlip) or _is(prob, StickSlipSmall)
+
+
+def model_dims(prob):  # noqa: ARG001 - resolved by overload
+    """(N, dc) of a model or tangent record: a small record's compile-time literals, or a
+    generic record's fields."""
+
+
+@overload(model_dims, **_OVL)
+def _model_dims(prob):
+    if _is(prob, StickSlipSmall) or _is(prob, StickSlipTangentSmall):
         n_osc, dc = _small_dims(prob)
+        return lambda prob: (n_osc, dc)
+    if _is(prob, StickSlip) or _is(prob, StickSlipTangent):
+        return lambda prob: (prob.n_osc, prob.dc)
+
+
+def _factor_into(w_factor_fn):
+    """W = sigma I - J by ``w_factor_fn`` into ``lin``, keeping the Schur complement."""
+
+    def factor(lin, sigma, n_osc, dc):
+        schur = w_factor_fn(
+            sigma, lin.blocks, lin.col, lin.row, lin.scal[0], n_osc, dc, lin.lu, lin.piv, lin.z
+        )
+        lin.scal[1] = schur
+        return math.isfinite(schur)
+
+    return factor
+
+
+#: ``factor_w(lin, sigma, n_osc, dc) -> bool``: the model's W into ``lin`` (called
+#: linear algebra), ``factor_w_inline`` the same with it inlined (small records).
+factor_w = njit(inline="always", **_JIT)(_factor_into(w_factor))
+factor_w_inline = njit(inline="always", **_JIT)(_factor_into(w_factor_inline))
+
+
+@overload(problem_f, **_OVL)
+def _model_f(prob, y, out):
+    if _is_model(prob):
 
         def impl(prob, y, out):
+            n_osc, dc = model_dims(prob)
             rhs(y, prob.p, n_osc, dc, out)
 
         return impl
 
 
 @overload(problem_jac, **_OVL)
-def _small_jac(prob, y, lin):
-    if _is(prob, StickSlipSmall):
-        n_osc, dc = _small_dims(prob)
+def _model_jac(prob, y, lin):
+    if _is_model(prob):
 
         def impl(prob, y, lin):
-            corner = jacobian_blocks(y, prob.p, n_osc, dc, lin.blocks, lin.col, lin.row)
-            lin.scal[0] = corner
+            n_osc, dc = model_dims(prob)
+            lin.scal[0] = jacobian_blocks(y, prob.p, n_osc, dc, lin.blocks, lin.col, lin.row)
 
         return impl
 
 
 @overload(problem_factor, **_OVL)
-def _small_factor(prob, lin, sigma):
+def _model_factor(prob, lin, sigma):
     if _is(prob, StickSlipSmall):
         n_osc, dc = _small_dims(prob)
         if not dc:
             # the blocks alone: W has no border
             return lambda prob, lin, sigma: blocks_factor(sigma, lin.blocks, n_osc, lin.lu, lin.piv)
-
-        def impl(prob, lin, sigma):
-            schur = w_factor_inline(
-                sigma, lin.blocks, lin.col, lin.row, lin.scal[0], n_osc, dc, lin.lu, lin.piv,
-                lin.z,
-            )  # fmt: skip
-            lin.scal[1] = schur
-            return math.isfinite(schur)
-
-        return impl
+        return lambda prob, lin, sigma: factor_w_inline(lin, sigma, n_osc, dc)
+    if _is(prob, StickSlip):
+        return lambda prob, lin, sigma: factor_w(lin, sigma, prob.n_osc, prob.dc)
 
 
 @overload(problem_solve, **_OVL)
-def _small_solve(prob, lin, b):
+def _model_solve(prob, lin, b):
     if _is(prob, StickSlipSmall):
         n_osc, dc = _small_dims(prob)
         if not dc:
             return lambda prob, lin, b: blocks_solve(lin.lu, lin.piv, b, n_osc)
+        return lambda prob, lin, b: w_solve_inline(
+            lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], n_osc, dc, b
+        )
+    if _is(prob, StickSlip):
+        return lambda prob, lin, b: w_solve(
+            lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, b
+        )
 
-        def impl(prob, lin, b):
-            w_solve_inline(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], n_osc, dc, b)
 
-        return impl
+# ------------------------------------------------------------------- defaults
+# A record that does not overload these gets the default algorithms (the model and
+# the test problems); the tangent records bring their own (core/tangent.py).
+def _takes_defaults(prob) -> bool:
+    return isinstance(prob, types.BaseNamedTuple) and not (
+        _is(prob, StickSlipTangent) or _is(prob, StickSlipTangentSmall)
+    )
 
 
 @overload(problem_error_norm, **_OVL)
-def _small_error_norm(prob, err, y0, y1, rtol, atol):
-    if _is(prob, StickSlipSmall):
+def _default_error_norm(prob, err, y0, y1, rtol, atol):
+    if _takes_defaults(prob):
         return lambda prob, err, y0, y1, rtol, atol: error_norm(err, y0, y1, rtol, atol)
 
 
 @overload(problem_initial_step, **_OVL)
-def _small_initial_step(prob, y, f0, rtol, atol, order, work, fwork):
-    if _is(prob, StickSlipSmall):
-
-        def impl(prob, y, f0, rtol, atol, order, work, fwork):
-            return initial_step(prob, y, f0, rtol, atol, order, work, fwork)
-
-        return impl
-
-
-# ------------------------------------------------------------------- StickSlip
-@overload(problem_f, **_OVL)
-def _f(prob, y, out):
-    if _is(prob, StickSlip):
-
-        def impl(prob, y, out):
-            rhs(y, prob.p, prob.n_osc, prob.dc, out)
-
-        return impl
-
-
-@overload(problem_jac, **_OVL)
-def _jac(prob, y, lin):
-    if _is(prob, StickSlip):
-
-        def impl(prob, y, lin):
-            corner = jacobian_blocks(y, prob.p, prob.n_osc, prob.dc, lin.blocks, lin.col, lin.row)
-            lin.scal[0] = corner
-
-        return impl
-
-
-@overload(problem_factor, **_OVL)
-def _factor(prob, lin, sigma):
-    if _is(prob, StickSlip):
-
-        def impl(prob, lin, sigma):
-            schur = w_factor(
-                sigma, lin.blocks, lin.col, lin.row, lin.scal[0], prob.n_osc, prob.dc,
-                lin.lu, lin.piv, lin.z,
-            )  # fmt: skip
-            lin.scal[1] = schur
-            return math.isfinite(schur)
-
-        return impl
-
-
-@overload(problem_solve, **_OVL)
-def _solve(prob, lin, b):
-    if _is(prob, StickSlip):
-
-        def impl(prob, lin, b):
-            w_solve(lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], prob.n_osc, prob.dc, b)
-
-        return impl
-
-
-@overload(problem_error_norm, **_OVL)
-def _error_norm(prob, err, y0, y1, rtol, atol):
-    if _is(prob, StickSlip):
-
-        def impl(prob, err, y0, y1, rtol, atol):
-            return error_norm(err, y0, y1, rtol, atol)
-
-        return impl
-
-
-@overload(problem_initial_step, **_OVL)
-def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
-    if _is(prob, StickSlip):
+def _default_initial_step(prob, y, f0, rtol, atol, order, work, fwork):
+    if _takes_defaults(prob):
 
         def impl(prob, y, f0, rtol, atol, order, work, fwork):
             return initial_step(prob, y, f0, rtol, atol, order, work, fwork)

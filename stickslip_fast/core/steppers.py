@@ -216,16 +216,43 @@ def erk_step(A, b, b_err, prob, y0, h, K, ytmp, y1, err) -> None:
         err[i] = h * e
 
 
+@njit(inline="always", **_JIT)
+def erk_init(prob, y, ws) -> None:
+    """f(y) into ws.f0 and ws.K[0] (FSAL: the first stage of the first step)."""
+    problem_f(prob, y, ws.f0)
+    for i in range(y.size):
+        ws.K[0, i] = ws.f0[i]
+
+
+@njit(inline="always", **_JIT)
+def erk_accept(erk, prob, y, ws, modified) -> None:
+    """After an accepted step of the explicit tableau ``erk``: the next first stage f(y)
+    into ws.K[0], the FSAL stage unless the step's end was modified (an event)."""
+    if modified:
+        problem_f(prob, y, ws.K[0])
+    else:
+        last = erk.b.size - 1
+        for i in range(y.size):
+            ws.K[0, i] = ws.K[last, i]
+
+
+@njit(inline="always", **_JIT)
+def ros_step(ros, prob, lin, y, h, ws) -> bool:
+    """One step of the Rosenbrock tableau ``ros``, the Jacobian evaluated at y first where
+    the workspace's is stale (``ws.flags[0] == 0``); False if W is singular."""
+    if ws.flags[0] == 0:
+        problem_jac(prob, y, lin)
+        ws.flags[0] = 1
+    return rosenbrock_step(
+        ros.gamma, ros.a, ros.C, ros.b, ros.b_err, prob, lin, y, ws.f0, h, ws.K, ws.ytmp,
+        ws.ftmp, ws.ynew, ws.err,
+    )  # fmt: skip
+
+
 @overload_call(stepper_init)
 def _erk_init(method, prob, lin, y, ws):
     if _is(method, ExplicitRKMethod):
-
-        def impl(method, prob, lin, y, ws):
-            problem_f(prob, y, ws.f0)
-            for i in range(y.size):
-                ws.K[0, i] = ws.f0[i]  # FSAL: the first stage of the first step
-
-        return impl
+        return lambda method, prob, lin, y, ws: erk_init(prob, y, ws)
     if _is(method, RosenbrockMethod):
 
         def impl(method, prob, lin, y, ws):
@@ -245,32 +272,13 @@ def _step(method, prob, lin, y, h, ws):
 
         return impl
     if _is(method, RosenbrockMethod):
-
-        def impl(method, prob, lin, y, h, ws):
-            if ws.flags[0] == 0:
-                problem_jac(prob, y, lin)
-                ws.flags[0] = 1
-            return rosenbrock_step(
-                method.gamma, method.a, method.C, method.b, method.b_err, prob, lin, y, ws.f0,
-                h, ws.K, ws.ytmp, ws.ftmp, ws.ynew, ws.err,
-            )  # fmt: skip
-
-        return impl
+        return lambda method, prob, lin, y, h, ws: ros_step(method, prob, lin, y, h, ws)
 
 
 @overload_call(stepper_accept)
 def _accept(method, prob, lin, y, ws, modified):
     if _is(method, ExplicitRKMethod):
-
-        def impl(method, prob, lin, y, ws, modified):
-            if modified:
-                problem_f(prob, y, ws.K[0])
-            else:
-                last = method.b.size - 1
-                for i in range(y.size):
-                    ws.K[0, i] = ws.K[last, i]
-
-        return impl
+        return lambda method, prob, lin, y, ws, modified: erk_accept(method, prob, y, ws, modified)
     if _is(method, RosenbrockMethod):
 
         def impl(method, prob, lin, y, ws, modified):

@@ -23,10 +23,10 @@ from ..model.equations import (
 )
 from ..model.linalg import (
     bordered_matvec_inline,
-    w_factor_inline,
     w_solve_inline,
 )
 from ..model.params import P_ETA, P_ETAP, eta_prime
+from . import problems
 from .problems import (
     _JIT,
     _OVL,
@@ -36,14 +36,9 @@ from .problems import (
     StickSlipTangent,
     StickSlipTangentSmall,
     _is,
-    _small_dims,
+    factor_w_inline,
     initial_step,
-    problem_error_norm,
-    problem_f,
-    problem_factor,
-    problem_initial_step,
-    problem_jac,
-    problem_solve,
+    model_dims,
 )
 
 __all__ = ["make_tangent", "make_sensitivity", "tangent_variant"]
@@ -117,6 +112,23 @@ def _tangent_variant(prob, variant):
         return impl
 
 
+# ----------------------------------------- StickSlipTangent and StickSlipTangentSmall
+def _is_tangent(prob) -> bool:
+    return _is(prob, StickSlipTangent) or _is(prob, StickSlipTangentSmall)
+
+
+def _tangent_base(prob):  # noqa: ARG001 - resolved by overload
+    """The model's record (StickSlip or StickSlipSmall) of a tangent record."""
+
+
+@overload(_tangent_base, **_OVL)
+def _tangent_base_impl(prob):
+    if _is(prob, StickSlipTangentSmall):
+        return lambda prob: StickSlipSmall(prob.p, prob.shape)
+    if _is(prob, StickSlipTangent):
+        return lambda prob: StickSlip(prob.p, prob.n_osc, prob.dc)
+
+
 # ------------------------------------------------- StickSlipTangent(Small), shared
 # One body per generic function for both records: the generic record passes its
 # run-time N and belt, the small one literals. The arithmetic is the same, so the two
@@ -127,7 +139,8 @@ def _tangent_variant(prob, variant):
 # stepper as well they ran 15 % faster but compiled 2-5x longer (measured: a cold
 # find_orbit 65 s against 27 s, a cold Lyapunov run 46 s against 15 s).
 @njit(**_JIT)
-def _tangent_f(prob, sens, n_osc, dc, y, out):
+def _tangent_f(prob, sens, y, out):
+    n_osc, dc = model_dims(prob)
     n = 4 * n_osc + (1 if dc else 0)
     k = prob.n_tangent
     rhs(y[:n], prob.p, n_osc, dc, out[:n])
@@ -152,7 +165,8 @@ def _tangent_f(prob, sens, n_osc, dc, y, out):
 # partials went stale: the steps stayed correct but ~50x more of them were needed;
 # tests/test_steppers.py checks the step count now).
 @njit(**_JIT)
-def _tangent_jac(prob, sens, n_osc, dc, y, lin):
+def _tangent_jac(prob, sens, y, lin):
+    n_osc, dc = model_dims(prob)
     n = 4 * n_osc + (1 if dc else 0)
     lin.scal[0] = jacobian_blocks(y[:n], prob.p, n_osc, dc, lin.blocks, lin.col, lin.row)
     second_partials_at(y[:n], prob.p, n_osc, dc, prob.d2)
@@ -174,7 +188,8 @@ def _tangent_jac(prob, sens, n_osc, dc, y, lin):
 
 
 @njit(**_JIT)
-def _tangent_solve(prob, sens, n_osc, dc, lin, b):
+def _tangent_solve(prob, sens, lin, b):
+    n_osc, dc = model_dims(prob)
     # [[W, 0], [-H(u_j), W]] x = b: solve the state part, then each tangent part
     n = 4 * n_osc + (1 if dc else 0)
     ky = b[:n]
@@ -195,7 +210,8 @@ def _tangent_solve(prob, sens, n_osc, dc, lin, b):
 
 
 @njit(**_JIT)
-def _tangent_error_norm(prob, sens, n_osc, dc, err, y0, y1, rtol, atol):
+def _tangent_error_norm(prob, sens, err, y0, y1, rtol, atol):
+    n_osc, dc = model_dims(prob)
     # y scaled by atol + rtol |y|; u_j by tangent_atol |u_j(t0)| + rtol |u_j|; the
     # sensitivity (from s = 0) by tangent_atol max(|s(t0)|, 1) + rtol |s|
     n = 4 * n_osc + (1 if dc else 0)
@@ -220,104 +236,52 @@ def _tangent_error_norm(prob, sens, n_osc, dc, err, y0, y1, rtol, atol):
     return math.sqrt(acc * (1.0 / ((1.0 + k) * n)))
 
 
-# ----------------------------------------- StickSlipTangent and StickSlipTangentSmall
-def _is_tangent(prob) -> bool:
-    return _is(prob, StickSlipTangent) or _is(prob, StickSlipTangentSmall)
-
-
-def _tangent_dims(prob):  # noqa: ARG001 - resolved by overload
-    """(N, dc): the generic record's fields, or the small record's compile-time literals."""
-
-
-@overload(_tangent_dims, **_OVL)
-def _tangent_dims_impl(prob):
-    if _is(prob, StickSlipTangentSmall):
-        n_osc, dc = _small_dims(prob)
-        return lambda prob: (n_osc, dc)
-    if _is(prob, StickSlipTangent):
-        return lambda prob: (prob.n_osc, prob.dc)
-
-
-def _tangent_base(prob):  # noqa: ARG001 - resolved by overload
-    """The model's record (StickSlip or StickSlipSmall) of a tangent record."""
-
-
-@overload(_tangent_base, **_OVL)
-def _tangent_base_impl(prob):
-    if _is(prob, StickSlipTangentSmall):
-        return lambda prob: StickSlipSmall(prob.p, prob.shape)
-    if _is(prob, StickSlipTangent):
-        return lambda prob: StickSlip(prob.p, prob.n_osc, prob.dc)
-
-
-@overload(problem_f, **_OVL)
+# The overloads: the bodies above take N and dc from the record (literals for the small one).
+@overload(problems.problem_f, **_OVL)
 def _tangent_f_ovl(prob, y, out):
     if _is_tangent(prob):
-
-        def impl(prob, y, out):
-            n_osc, dc = _tangent_dims(prob)
-            _tangent_f(prob, prob.sens, n_osc, dc, y, out)
-
-        return impl
+        return lambda prob, y, out: _tangent_f(prob, prob.sens, y, out)
 
 
-@overload(problem_jac, **_OVL)
+@overload(problems.problem_jac, **_OVL)
 def _tangent_jac_ovl(prob, y, lin):
     if _is_tangent(prob):
-
-        def impl(prob, y, lin):
-            n_osc, dc = _tangent_dims(prob)
-            _tangent_jac(prob, prob.sens, n_osc, dc, y, lin)
-
-        return impl
+        return lambda prob, y, lin: _tangent_jac(prob, prob.sens, y, lin)
 
 
-@overload(problem_factor, **_OVL)
+@overload(problems.problem_factor, **_OVL)
 def _tangent_factor_ovl(prob, lin, sigma):
     if _is_tangent(prob):
 
         def impl(prob, lin, sigma):
             # the model's W: the tangent blocks share it
-            n_osc, dc = _tangent_dims(prob)
-            schur = w_factor_inline(
-                sigma, lin.blocks, lin.col, lin.row, lin.scal[0], n_osc, dc, lin.lu, lin.piv,
-                lin.z,
-            )  # fmt: skip
-            lin.scal[1] = schur
-            return math.isfinite(schur)
+            n_osc, dc = model_dims(prob)
+            return factor_w_inline(lin, sigma, n_osc, dc)
 
         return impl
 
 
-@overload(problem_solve, **_OVL)
+@overload(problems.problem_solve, **_OVL)
 def _tangent_solve_ovl(prob, lin, b):
     if _is_tangent(prob):
-
-        def impl(prob, lin, b):
-            n_osc, dc = _tangent_dims(prob)
-            _tangent_solve(prob, prob.sens, n_osc, dc, lin, b)
-
-        return impl
+        return lambda prob, lin, b: _tangent_solve(prob, prob.sens, lin, b)
 
 
-@overload(problem_error_norm, **_OVL)
+@overload(problems.problem_error_norm, **_OVL)
 def _tangent_error_norm_ovl(prob, err, y0, y1, rtol, atol):
     if _is_tangent(prob):
-
-        def impl(prob, err, y0, y1, rtol, atol):
-            n_osc, dc = _tangent_dims(prob)
-            return _tangent_error_norm(prob, prob.sens, n_osc, dc, err, y0, y1, rtol, atol)
-
-        return impl
+        return lambda prob, err, y0, y1, rtol, atol: _tangent_error_norm(
+            prob, prob.sens, err, y0, y1, rtol, atol
+        )
 
 
-@overload(problem_initial_step, **_OVL)
+@overload(problems.problem_initial_step, **_OVL)
 def _tangent_initial_step_ovl(prob, y, f0, rtol, atol, order, work, fwork):
     if _is_tangent(prob):
 
         def impl(prob, y, f0, rtol, atol, order, work, fwork):
             # from the state part alone
-            n_osc, dc = _tangent_dims(prob)
+            n_osc, dc = model_dims(prob)
             n = 4 * n_osc + (1 if dc else 0)
             base = _tangent_base(prob)
             return initial_step(base, y[:n], f0[:n], rtol, atol, order, work[:n], fwork[:n])

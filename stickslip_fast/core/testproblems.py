@@ -3,7 +3,8 @@
 They check the steppers and the driver apart from the stick-slip model
 (tests/test_steppers.py), and they are the worked example of how to add a
 problem: a namedtuple record, a linear workspace (:class:`DenseLinear`), and one
-``overload`` of each generic function of :mod:`stickslip_fast.core.problems`.
+``overload`` of each generic function of :mod:`stickslip_fast.core.problems` that has no
+default (the error norm and the starting step have).
 
 :class:`LinearProblem`
     y' = A y; exact solution expm(A t) y0.
@@ -32,18 +33,9 @@ from numba.extending import overload
 
 from ..base.jit import JIT, OVERLOAD
 from ..model.linalg import dense_w_factor, dense_w_solve
+from . import problems
 from .autoswitch import AUTO_METHOD, N_AUTO_FLAGS, N_AUTO_STATS
 from .driver import STOP_AT_END, Controls, PoincareObserver, Section, drive, simple_stop
-from .problems import (
-    error_norm,
-    initial_step,
-    problem_error_norm,
-    problem_f,
-    problem_factor,
-    problem_initial_step,
-    problem_jac,
-    problem_solve,
-)
 from .steppers import DOPRI5_METHOD, RODAS5P_METHOD, alloc_workspace
 
 __all__ = [
@@ -66,116 +58,104 @@ VanDerPol = namedtuple("VanDerPol", ["mu"])
 #: Dense Jacobian, its W = sigma I - J factors and pivots.
 DenseLinear = namedtuple("DenseLinear", ["jac", "lu", "piv"])
 
-_RECORDS = (LinearProblem, Kaps, ProtheroRobinson, VanDerPol)
+
+# -------------------------------------------- each problem's f and Jacobian
+@njit(inline="always", **_JIT)
+def _linear_f(prob, y, out):
+    n = y.size
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += prob.A[i, j] * y[j]
+        out[i] = acc
+
+
+@njit(inline="always", **_JIT)
+def _linear_jac(prob, y, lin):
+    lin.jac[:, :] = prob.A
+
+
+@njit(inline="always", **_JIT)
+def _kaps_f(prob, y, out):
+    out[0] = -(2.0 + 1.0 / prob.eps) * y[0] + y[1] * y[1] / prob.eps
+    out[1] = y[0] - y[1] - y[1] * y[1]
+
+
+@njit(inline="always", **_JIT)
+def _kaps_jac(prob, y, lin):
+    lin.jac[0, 0] = -(2.0 + 1.0 / prob.eps)
+    lin.jac[0, 1] = 2.0 * y[1] / prob.eps
+    lin.jac[1, 0] = 1.0
+    lin.jac[1, 1] = -1.0 - 2.0 * y[1]
+
+
+@njit(inline="always", **_JIT)
+def _prothero_robinson_f(prob, y, out):
+    out[0] = prob.lam * (y[0] - math.sin(y[1])) + math.cos(y[1])
+    out[1] = 1.0
+
+
+@njit(inline="always", **_JIT)
+def _prothero_robinson_jac(prob, y, lin):
+    lin.jac[0, 0] = prob.lam
+    lin.jac[0, 1] = -prob.lam * math.cos(y[1]) - math.sin(y[1])
+    lin.jac[1, 0] = 0.0
+    lin.jac[1, 1] = 0.0
+
+
+@njit(inline="always", **_JIT)
+def _van_der_pol_f(prob, y, out):
+    out[0] = y[1]
+    out[1] = prob.mu * (1.0 - y[0] * y[0]) * y[1] - y[0]
+
+
+@njit(inline="always", **_JIT)
+def _van_der_pol_jac(prob, y, lin):
+    lin.jac[0, 0] = 0.0
+    lin.jac[0, 1] = 1.0
+    lin.jac[1, 0] = -2.0 * prob.mu * y[0] * y[1] - 1.0
+    lin.jac[1, 1] = prob.mu * (1.0 - y[0] * y[0])
+
+
+#: Each record's (f, Jacobian).
+_FUNCTIONS = {
+    LinearProblem: (_linear_f, _linear_jac),
+    Kaps: (_kaps_f, _kaps_jac),
+    ProtheroRobinson: (_prothero_robinson_f, _prothero_robinson_jac),
+    VanDerPol: (_van_der_pol_f, _van_der_pol_jac),
+}
 
 
 def _which(typ):
-    if isinstance(typ, types.BaseNamedTuple) and typ.instance_class in _RECORDS:
+    if isinstance(typ, types.BaseNamedTuple) and typ.instance_class in _FUNCTIONS:
         return typ.instance_class
     return None
 
 
-@overload(problem_f, **_OVL)
+@overload(problems.problem_f, **_OVL)
 def _f(prob, y, out):
-    cls = _which(prob)
-    if cls is LinearProblem:
-
-        def impl(prob, y, out):
-            n = y.size
-            for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += prob.A[i, j] * y[j]
-                out[i] = acc
-
-        return impl
-    if cls is Kaps:
-
-        def impl(prob, y, out):
-            out[0] = -(2.0 + 1.0 / prob.eps) * y[0] + y[1] * y[1] / prob.eps
-            out[1] = y[0] - y[1] - y[1] * y[1]
-
-        return impl
-    if cls is ProtheroRobinson:
-
-        def impl(prob, y, out):
-            out[0] = prob.lam * (y[0] - math.sin(y[1])) + math.cos(y[1])
-            out[1] = 1.0
-
-        return impl
-    if cls is VanDerPol:
-
-        def impl(prob, y, out):
-            out[0] = y[1]
-            out[1] = prob.mu * (1.0 - y[0] * y[0]) * y[1] - y[0]
-
-        return impl
+    if _which(prob) is not None:
+        f = _FUNCTIONS[_which(prob)][0]
+        return lambda prob, y, out: f(prob, y, out)
 
 
-@overload(problem_jac, **_OVL)
+@overload(problems.problem_jac, **_OVL)
 def _jac(prob, y, lin):
-    cls = _which(prob)
-    if cls is LinearProblem:
-
-        def impl(prob, y, lin):
-            lin.jac[:, :] = prob.A
-
-        return impl
-    if cls is Kaps:
-
-        def impl(prob, y, lin):
-            lin.jac[0, 0] = -(2.0 + 1.0 / prob.eps)
-            lin.jac[0, 1] = 2.0 * y[1] / prob.eps
-            lin.jac[1, 0] = 1.0
-            lin.jac[1, 1] = -1.0 - 2.0 * y[1]
-
-        return impl
-    if cls is ProtheroRobinson:
-
-        def impl(prob, y, lin):
-            lin.jac[0, 0] = prob.lam
-            lin.jac[0, 1] = -prob.lam * math.cos(y[1]) - math.sin(y[1])
-            lin.jac[1, 0] = 0.0
-            lin.jac[1, 1] = 0.0
-
-        return impl
-    if cls is VanDerPol:
-
-        def impl(prob, y, lin):
-            lin.jac[0, 0] = 0.0
-            lin.jac[0, 1] = 1.0
-            lin.jac[1, 0] = -2.0 * prob.mu * y[0] * y[1] - 1.0
-            lin.jac[1, 1] = prob.mu * (1.0 - y[0] * y[0])
-
-        return impl
+    if _which(prob) is not None:
+        jac = _FUNCTIONS[_which(prob)][1]
+        return lambda prob, y, lin: jac(prob, y, lin)
 
 
-@overload(problem_factor, **_OVL)
+@overload(problems.problem_factor, **_OVL)
 def _factor(prob, lin, sigma):
     if _which(prob) is not None:
         return lambda prob, lin, sigma: dense_w_factor(sigma, lin.jac, lin.lu, lin.piv)
 
 
-@overload(problem_solve, **_OVL)
+@overload(problems.problem_solve, **_OVL)
 def _solve(prob, lin, b):
     if _which(prob) is not None:
         return lambda prob, lin, b: dense_w_solve(lin.lu, lin.piv, b)
-
-
-@overload(problem_error_norm, **_OVL)
-def _error_norm(prob, err, y0, y1, rtol, atol):
-    if _which(prob) is not None:
-        return lambda prob, err, y0, y1, rtol, atol: error_norm(err, y0, y1, rtol, atol)
-
-
-@overload(problem_initial_step, **_OVL)
-def _initial_step(prob, y, f0, rtol, atol, order, work, fwork):
-    if _which(prob) is not None:
-
-        def impl(prob, y, f0, rtol, atol, order, work, fwork):
-            return initial_step(prob, y, f0, rtol, atol, order, work, fwork)
-
-        return impl
 
 
 @njit(**_JIT)

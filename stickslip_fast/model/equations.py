@@ -128,17 +128,18 @@ def friction_second_partials(v: float, w: float, eps: float, etap: float):
     return t_vv, t_vw, t_ww, m_vv, m_vw, m_ww
 
 
+@njit(inline="always", **_JIT)
+def _coefficients(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool):
+    """(m, k12, c, c12, mu, eps, eta', v_b): the slots f and its Jacobian read, and the belt
+    speed at y (the motor's state, or the constant belt's parameter)."""
+    vb = y[4 * n_osc] if dc else p[P_VB]
+    return p[P_M], p[P_K12], p[P_C], p[P_C12], p[P_MU], p[P_EPS], p[P_ETAP], vb
+
+
 @njit(**_JIT)
 def rhs(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool, dydt: np.ndarray) -> None:
     """Write dy/dt into ``dydt`` (no allocation)."""
-    m = p[P_M]
-    k12 = p[P_K12]
-    c = p[P_C]
-    c12 = p[P_C12]
-    mu = p[P_MU]
-    eps = p[P_EPS]
-    etap = p[P_ETAP]
-    vb = y[4 * n_osc] if dc else p[P_VB]
+    m, k12, c, c12, mu, eps, etap, vb = _coefficients(y, p, n_osc, dc)
     t_sum = 0.0
     for i in range(n_osc):
         j = 4 * i
@@ -172,14 +173,7 @@ def jacobian_blocks(
     ``border_col`` (N, 4) with d f_i / d v_b and ``border_row`` (N, 4) with
     d f_vb / d y_i. Returns the corner d f_vb / d v_b (0.0 for a constant belt).
     """
-    m = p[P_M]
-    k12 = p[P_K12]
-    c = p[P_C]
-    c12 = p[P_C12]
-    mu = p[P_MU]
-    eps = p[P_EPS]
-    etap = p[P_ETAP]
-    vb = y[4 * n_osc] if dc else p[P_VB]
+    m, k12, c, c12, mu, eps, etap, vb = _coefficients(y, p, n_osc, dc)
     inv_m = 1.0 / m
     corner = 0.0
     if dc:
