@@ -208,3 +208,40 @@ def test_the_walk_on_from_single_shooting_does_not_turn_back():
         br = continue_multiple(s, "eta", 1, x0, 1.0, (1.9, 2.1), segments=mesh, stages=(),
                                chord=chord, **kw)  # fmt: skip
         assert br.values.size == 3 and (br.values[-1] < 2.0) == down, br.values
+
+
+def test_a_re_sampled_point_is_integrated_at_its_own_parameter():
+    # Re-meshing re-samples the last two points of a piece on the new mesh, integrating
+    # each from its segment starts. It used to integrate them with the system of the
+    # piece's first point: far along an unstable branch the re-sampled point then could
+    # not be corrected and re-meshing silently fell back to the old mesh. Here the piece
+    # has moved 0.012 in eta: re-sampled at its own eta, the point is already an orbit on
+    # the new mesh, and correcting it moves it by no more than the tolerances.
+    from stickslip_fast.bifurcation.arclength import pseudo_arclength
+    from stickslip_fast.bifurcation.multishoot import MESH_LIMIT
+    from stickslip_fast.bifurcation.multishoot_branch import (
+        _resume,
+        ms_evaluator,
+        ms_start,
+        multiplier_tests,
+    )
+
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    rtol, atol, fd, tol = 1e-11, 1e-13, 1e-7, 1e-10
+    x0, mesh = ms_start(s, orbit.points[0], orbit.T, "eta", 3, rtol, atol, fd, tol, MESH_LIMIT)
+    evaluate, system_at, shooting_at = ms_evaluator(s, "eta", mesh, rtol, atol, fd)
+    xs, _, _, status = pseudo_arclength(
+        evaluate, x0, 1.0, (1.9, 2.1), ds=0.02, ds_min=1e-8, ds_max=0.05, max_points=3,
+        tol=tol, tests=multiplier_tests, spectrum=periodic_multipliers,
+    )  # fmt: skip
+    assert status == "max-points" and xs[-1][-1] - x0[-1] > 0.005, (status, xs[:, -1])
+    new_mesh = np.linspace(0.0, 1.0, 6)
+    ev_new, _, shoot_new = ms_evaluator(s, "eta", new_mesh, rtol, atol, fd)
+    ms_new = shoot_new(xs[-1][-1], None)
+    x, chord = _resume(shooting_at(x0[-1], None), ms_new, ev_new, xs, tol, system_at)
+    assert x is not None
+    Y_old, T_old = shooting_at(xs[-1][-1], None).unpack(xs[-1][:-1])
+    Y_new, T_new = ms_new.unpack(x[:-1])
+    assert abs(x[-1] - xs[-1][-1]) < 1e-9 and abs(T_new - T_old) < 1e-9
+    assert np.max(np.abs(Y_new[0] - Y_old[0])) < 1e-9
