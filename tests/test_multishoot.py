@@ -1,10 +1,11 @@
 """Multiple shooting (issue 28, item 1): the periodic QR multipliers against analytic
 products, multiple against single shooting where both converge, and multiple shooting
-where single shooting stops. About 10 s warm."""
+where single shooting stops, and re-meshing against the fixed mesh. About 27 s warm."""
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
@@ -89,12 +90,26 @@ Z_UNSTABLE = np.array([0.07259589657661687, 0.0, 0.1221705830435874, -0.00666657
 T_UNSTABLE = 14.043700862197168
 
 
+# the start that converges onto it (from Z_UNSTABLE itself find_orbit ends "no-progress":
+# at multiplier 1e8 the side of the stable manifold the start lies on decides)
+START_UNSTABLE = Z_UNSTABLE + np.array([1e-9, 0.0, -1e-9, 1e-9])
+
+
+@functools.cache
+def unstable_orbit():
+    """The orbit at ETA_UNSTABLE by multiple shooting (shared by the tests below, ~3.5 s)."""
+    s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
+    return ssf.find_orbit(
+        s, START_UNSTABLE, 1, shooting="multiple", tol=1e-11, rtol=1e-13, atol=1e-15
+    )
+
+
 def test_multiple_shooting_converges_where_single_shooting_stops():
     s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
-    start = Z_UNSTABLE + np.array([1e-9, 0.0, -1e-9, 1e-9])
+    start = START_UNSTABLE
     single = ssf.find_orbit(s, start, 1, max_iter=8)
     assert not single.converged and single.status in ("no-progress", "max-iter"), single
-    multi = ssf.find_orbit(s, start, 1, shooting="multiple", tol=1e-11, rtol=1e-13, atol=1e-15)
+    multi = unstable_orbit()
     assert multi.converged, multi
     # the continuation's point (corrected to tol 1e-12 there, at the same tolerances)
     np.testing.assert_allclose(multi.points[0], Z_UNSTABLE, rtol=0, atol=1e-10)
@@ -208,3 +223,126 @@ def test_the_walk_on_from_single_shooting_does_not_turn_back():
         br = continue_multiple(s, "eta", 1, x0, 1.0, (1.9, 2.1), segments=mesh, stages=(),
                                chord=chord, **kw)  # fmt: skip
         assert br.values.size == 3 and (br.values[-1] < 2.0) == down, br.values
+
+
+def test_a_re_sampled_point_is_integrated_at_its_own_parameter():
+    # Re-meshing re-samples the last two points of a piece on the new mesh, integrating
+    # each from its segment starts. It used to integrate them with the system of the
+    # piece's first point: far along an unstable branch the re-sampled point then could
+    # not be corrected and re-meshing silently fell back to the old mesh. Here the piece
+    # has moved 0.012 in eta: re-sampled at its own eta, the point is already an orbit on
+    # the new mesh, and correcting it moves it by no more than the tolerances.
+    from stickslip_fast.bifurcation.arclength import pseudo_arclength
+    from stickslip_fast.bifurcation.multishoot import MESH_LIMIT
+    from stickslip_fast.bifurcation.multishoot_branch import (
+        _resume,
+        ms_evaluator,
+        ms_start,
+        multiplier_tests,
+    )
+
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    rtol, atol, fd, tol = 1e-11, 1e-13, 1e-7, 1e-10
+    x0, mesh = ms_start(s, orbit.points[0], orbit.T, "eta", 3, rtol, atol, fd, tol, MESH_LIMIT)
+    evaluate, system_at, shooting_at = ms_evaluator(s, "eta", mesh, rtol, atol, fd)
+    xs, _, _, status = pseudo_arclength(
+        evaluate, x0, 1.0, (1.9, 2.1), ds=0.02, ds_min=1e-8, ds_max=0.05, max_points=3,
+        tol=tol, tests=multiplier_tests, spectrum=periodic_multipliers,
+    )  # fmt: skip
+    assert status == "max-points" and xs[-1][-1] - x0[-1] > 0.005, (status, xs[:, -1])
+    new_mesh = np.linspace(0.0, 1.0, 6)
+    ev_new, _, shoot_new = ms_evaluator(s, "eta", new_mesh, rtol, atol, fd)
+    ms_new = shoot_new(xs[-1][-1], None)
+    x, chord = _resume(shooting_at(x0[-1], None), ms_new, ev_new, xs, tol, system_at)
+    assert x is not None
+    Y_old, T_old = shooting_at(xs[-1][-1], None).unpack(xs[-1][:-1])
+    Y_new, T_new = ms_new.unpack(x[:-1])
+    assert abs(x[-1] - xs[-1][-1]) < 1e-9 and abs(T_new - T_old) < 1e-9
+    assert np.max(np.abs(Y_new[0] - Y_old[0])) < 1e-9
+
+
+def test_re_meshing_reaches_orbits_that_the_fixed_mesh_cannot(monkeypatch):
+    # The unstable side of Fig. 6's upper P1 fold from the orbit at multiplier 1.1e8, by
+    # multiple shooting with the same start, bounds and settings, once on the mesh fixed
+    # at the start and once re-meshed. Scaled down to take 20 points instead of minutes
+    # (with the default limits the fixed mesh from here is still going, at 3e15, after
+    # 40 points and ~1 min; tol 1e-11, rtol 1e-13, ds 1e-6):
+    # the start's mesh is refined only until no segment amplifies by more than 1e4
+    # (instead of MESH_LIMIT = 10; 18 segments, the largest 2.7e3) and re-meshing is
+    # triggered at 1e5 (instead of REMESH_LIMIT = 100: the same factor 10 above it).
+    # The fixed mesh then ends where its segment through the capture into the stick phase
+    # amplifies too much; re-meshing cuts it and goes on.
+    from stickslip_fast.bifurcation import multishoot_branch, orbit_branch
+    from stickslip_fast.bifurcation.multishoot import MultiShooting, refine_mesh
+    from stickslip_fast.bifurcation.returnmap import _field
+
+    monkeypatch.setattr(orbit_branch, "MESH_LIMIT", 1e4)
+    monkeypatch.setattr(multishoot_branch, "REMESH_LIMIT", 1e5)
+    pieces = []
+    walk = multishoot_branch.walk_pieces
+
+    def spy(*args, **kw):  # keeps the pieces: their meshes and segment starts
+        out = walk(*args, **kw)
+        pieces.append(out[0])
+        return out
+
+    monkeypatch.setattr(multishoot_branch, "walk_pieces", spy)
+    multi = unstable_orbit()
+    kw = dict(ds=3e-5, ds_max=1e-3, max_points=20, direction=-1, shooting="multiple",
+              tol=1e-12, rtol=1e-12, atol=1e-14, stick_events=False, sharp_ends=False)  # fmt: skip
+    fixed = ssf.continue_orbit(multi, "eta", (3.3, 3.33), **kw)
+    branch = ssf.continue_orbit(multi, "eta", (3.3, 3.33), remesh=True, **kw)
+    mu_fixed = np.abs(fixed.multipliers[:, 0])
+    mu = np.abs(branch.multipliers[:, 0])
+    # the fixed mesh ends short of max_points (measured: 17 points, eta = 3.3234741286,
+    # multiplier 1.5e13), the re-meshed branch does not (3.3234591398, 9.1e14)
+    assert fixed.status in ("precision-limit", "step-too-small") and fixed.values.size < 20
+    assert branch.status == "max-points" and branch.values.size == 20
+    assert len(pieces[0]) == 1 and len(pieces[1]) >= 2  # the second one was re-meshed
+    k = len(pieces[1][0].xs)  # up to the first re-mesh: the same calls, the same points
+    np.testing.assert_array_equal(branch.values[:k], fixed.values[:k])
+    assert np.all(np.diff(branch.values) < 0) and np.all(np.diff(mu) > 0)
+    assert branch.values[-1] < fixed.values.min() - 1e-5
+    assert mu_fixed.max() < 1e14 and mu[-1] > 20 * mu_fixed.max()
+
+    # The far point checked by another integrator: its segment starts, each integrated
+    # by simulate (Rodas5P, the trajectory kernel, not the variational one) over its
+    # segment, join into a periodic orbit. Measured: 7.8e-13 (the corrector's tol is
+    # 1e-12 with the other kernel); the same starts at eta moved by 1e-10 leave gaps of
+    # 1.8e-11, with T moved by 1e-9 3.3e-11: the bound pins the orbit far below the
+    # 1.5e-5 in eta between the two ends.
+    last = pieces[1][-1]
+    x = last.xs[-1]
+    assert x[-1] == branch.values[-1]
+    system = multi.system.replace(eta=float(x[-1]))
+    Y, T = last.ms.unpack(x[:-1])
+
+    def flow(y, tau):
+        res = ssf.simulate(system, tau, y0=y, rtol=1e-13, atol=1e-15, max_points=0)
+        assert abs(res.t_final - tau) < 1e-12 and np.all(np.isfinite(res.final_state)), res
+        return res.final_state
+
+    taus = np.diff(last.ms.mesh) * T
+    gaps = [np.max(np.abs(flow(Y[i], taus[i]) - Y[(i + 1) % len(taus)])) for i in range(len(taus))]
+    assert max(gaps) < 1e-11
+    # Its leading multiplier from central differences of simulate, segment by segment
+    # (no variational equations), on the orbit cut finer (no segment amplifying more than
+    # 10: on the branch's own mesh the segment through the capture amplifies by 7e3 and
+    # differences of 1e-9 across it are not linear: they give 9.6e13), multiplied by the
+    # periodic QR scheme tested above. Measured: 9.0788e14 against 9.0716e14 (8e-4).
+    ms = MultiShooting(system, last.ms.mesh, 1e-12, 1e-14, 1e-12)
+    fine = refine_mesh(ms, Y, T, limit=10.0)
+    starts = []  # at the fine cuts, integrated from the start of the segment they cut
+    for t in fine[:-1] * T:
+        j = int(np.searchsorted(last.ms.mesh * T, t, side="right")) - 1
+        dt = t - last.ms.mesh[j] * T
+        starts.append(flow(Y[j], dt) if dt > 0 else Y[j])
+    h, n = 1e-9, Y.shape[1]
+    phis = []
+    for y, tau in zip(starts, np.diff(fine) * T):
+        cols = [(flow(y + h * e, tau) - flow(y - h * e, tau)) / (2 * h) for e in np.eye(n)]
+        phis.append(np.array(cols).T)
+    fine_ms = MultiShooting(system, fine, 1e-12, 1e-14, 1e-12)
+    mu_fd = abs(periodic_multipliers(fine_ms.section_factors(phis, _field(system, Y[0])))[0])
+    assert abs(mu_fd / mu[-1] - 1) < 1e-2

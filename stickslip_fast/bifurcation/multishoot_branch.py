@@ -163,10 +163,11 @@ class _Piece:
 class _RemeshTrigger:
     """``pseudo_arclength``'s ``stop``: True where a segment of ``ms`` amplifies by more
     than the limit and :func:`remesh` gives another mesh (kept in ``mesh``, with the
-    walk's step size and the number of its stages left)."""
+    walk's step size and the number of its stages left). ``system_at``: the system at a
+    parameter value, at which :func:`remesh` integrates the point's segments."""
 
-    def __init__(self, ms: MultiShooting, limit: float = REMESH_LIMIT) -> None:
-        self.ms, self.limit = ms, limit
+    def __init__(self, ms: MultiShooting, system_at, limit: float = REMESH_LIMIT) -> None:
+        self.ms, self.system_at, self.limit = ms, system_at, limit
         self.mesh, self.ds, self.stages_left, self.limit_hit = None, math.nan, 0, math.nan
 
     def __call__(self, x, A, walk) -> bool:
@@ -174,7 +175,8 @@ class _RemeshTrigger:
         if not float(np.max(norms)) > self.limit:
             return False
         Y, T = self.ms.unpack(x[:-1])
-        mesh = remesh(self.ms, Y, T, norms)
+        ms = MultiShooting(self.system_at(x[-1]), self.ms.mesh, *self.ms.kw)
+        mesh = remesh(ms, Y, T, norms)
         if mesh.size == self.ms.mesh.size and np.allclose(mesh, self.ms.mesh, rtol=0, atol=1e-12):
             self.limit = 10.0 * float(np.max(norms))  # no better mesh: check again later
             return False
@@ -196,14 +198,16 @@ def _jump_test(ms0: MultiShooting, system_at):
     return jump
 
 
-def _resume(ms_old: MultiShooting, ms_new: MultiShooting, evaluate, xs, tol):
+def _resume(ms_old: MultiShooting, ms_new: MultiShooting, evaluate, xs, tol, system_at):
     """(x, orient): the last point of ``xs`` re-sampled on ``ms_new``'s mesh and corrected
     there (on the hyperplane through it normal to the re-sampled last chord, which also
-    orients the next tangent), or (None, None)."""
+    orients the next tangent), or (None, None). Each point is re-sampled at its own
+    parameter value (``system_at``), not at that of ``ms_old`` (the piece's first point)."""
     out = []
     for x in (xs[-2], xs[-1]):
-        Y, T = ms_old.unpack(x[:-1])
-        st, Yn = ms_old.states_at(Y, T, ms_new.mesh[:-1] * T, mesh=ms_old.mesh)
+        old = MultiShooting(system_at(x[-1]), ms_old.mesh, *ms_old.kw)
+        Y, T = old.unpack(x[:-1])
+        st, Yn = old.states_at(Y, T, ms_new.mesh[:-1] * T, mesh=old.mesh)
         if st != "ok":
             return None, None
         out.append(np.r_[ms_new.pack(Yn, T), x[-1]])
@@ -240,7 +244,7 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         for t2, r2, a2, d2 in settings[stage + 1 :]:
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
             refine.append((ev, t2, d2))
-        trigger = _RemeshTrigger(ms, limit) if remesh_ else None
+        trigger = _RemeshTrigger(ms, system_at, limit) if remesh_ else None
         xs, mults, bifs, status = pseudo_arclength(
             evaluate, x_start, direction, bounds, ds=ds, ds_min=ds_min, ds_max=kw["ds_max"],
             max_points=left, tol=tol, jump=_jump_test(ms, system_at), refine=refine,
@@ -258,7 +262,7 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
                                             kw["fd_step"])  # fmt: skip
         # the last point, in the stage reached: correct it with that stage's evaluator
         ms_cur = MultiShooting(ms.system, ms.mesh, rtol, atol, _TANGENT_ATOL)
-        x_new, orient = _resume(ms_cur, shoot_new(xs[-1][-1], None), ev_new, xs, tol)
+        x_new, orient = _resume(ms_cur, shoot_new(xs[-1][-1], None), ev_new, xs, tol, system_at)
         if x_new is None:  # go on on the old mesh from the last point
             x_new, orient, limit = xs[-1], xs[-1] - xs[-2], 10.0 * trigger.limit_hit
         else:
