@@ -2,7 +2,8 @@
 
 Usage::
 
-    python scripts/make_figures.py [--out figures/] [--quick] [--only 6,7] [--format png]
+    python scripts/make_figures.py [--out figures/] [--quick] [--only 6,7|planes|eta_k12]
+        [--format png]
 
 For each figure it runs the sweep (:func:`stickslip_fast.sweep`, streamed and
 resumable: re-running continues an interrupted sweep) or the single run
@@ -15,11 +16,20 @@ store the cheap synchronization measure (``analyses = ["sync"]`` in their config
 ``--quick`` (for CI) uses 12 values per sweep and a tenth of the times
 (t_end and t_transient divided by 10); its data files get a ``_quick`` suffix so
 they never clash with the full ones.
+
+After the paper's figures it draws **the paper in the plane** (issue 28, docs/census.md):
+the censuses over (η, k12), (η, v_b) and, with the DC motor, (η, v_b0) for one and two
+disks, from the configs in ``data/maps/`` (streamed and resumable like the sweeps), into
+``OUT/census_plane_<name>.png``; ``eta_k12_folds`` lays the fold curves of
+``data/curves/`` (``scripts/fold_curves_eta_k12.py``) over the (η, k12) maps. In
+``--quick`` a plane has 4 x 4 cells and 4 starts, at the full times. ``--only planes``
+makes the planes alone, ``--only eta_vb`` one of them.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -36,13 +46,15 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(HERE))
 
 import plot_bifurcation  # noqa: E402
+import plot_census_plane  # noqa: E402
 import plot_timeseries  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
 from stickslip_fast.cli.config import RunConfig, load_config  # noqa: E402
 from stickslip_fast.io import _jsonable, write_trajectory  # noqa: E402
 
-__all__ = ["FIGURES", "Figure", "run_config", "make_figures", "main"]
+__all__ = ["FIGURES", "PLANES", "Figure", "Plane", "run_config", "run_census", "make_figures",
+           "main"]  # fmt: skip
 
 DATA = ROOT / "data"
 
@@ -80,8 +92,30 @@ FIGURES: tuple[Figure, ...] = (
     Figure("18", "run", ("fig18_asymmetric_dcmotor_N2_eta8.toml",)),
 )
 
+
+@dataclass(frozen=True)
+class Plane:
+    """A census over a plane: its name, its config in data/maps/ and the curves laid over it."""
+
+    name: str  # the image is census_plane_<name>.<fmt>
+    config: str
+    curves: tuple[str, ...] = ()  # curve files in data/curves/
+
+
+_FOLDS = tuple(f"p1_fold_{name}_eta_k12.h5"
+               for name in ("upper", "lower", "upper_resumed", "lower_resumed", "closing"))  # fmt: skip
+
+PLANES: tuple[Plane, ...] = (
+    Plane("eta_k12", "census_plane_eta_k12.toml"),
+    Plane("eta_k12_folds", "census_plane_eta_k12.toml", _FOLDS),
+    Plane("eta_vb", "census_plane_eta_vb.toml"),
+    Plane("eta_vb0_dcmotor", "census_plane_eta_vb0_dcmotor.toml"),
+    Plane("eta_vb0_dcmotor_N2", "census_plane_eta_vb0_dcmotor_N2.toml"),
+)
+
 QUICK_VALUES = 12
 QUICK_TIME_FACTOR = 0.1
+QUICK_PLANE = 4  # cells per parameter and starts per cell of a quick census plane
 
 
 def _quick(cfg: RunConfig) -> RunConfig:
@@ -100,9 +134,8 @@ def _quick(cfg: RunConfig) -> RunConfig:
             sweep["values"] = np.linspace(v[0], v[-1], min(len(v), QUICK_VALUES))
     raw = json.loads(json.dumps(_jsonable(cfg.raw)))
     raw["integration"] = integ
-    return RunConfig(system=cfg.system, integration=integ, y0=cfg.y0, sample_dt=cfg.sample_dt,
-                     sweep=sweep, title=cfg.title + " [quick]", notes=cfg.notes,
-                     source=cfg.source, raw=raw)  # fmt: skip
+    return dataclasses.replace(cfg, integration=integ, sweep=sweep,
+                               title=cfg.title + " [quick]", raw=raw)  # fmt: skip
 
 
 def run_config(cfg: RunConfig, out: Path, threads: int | None = None) -> Path:
@@ -150,6 +183,58 @@ def run_config(cfg: RunConfig, out: Path, threads: int | None = None) -> Path:
         return out
 
 
+def _quick_plane(cfg: RunConfig) -> RunConfig:
+    """A cheaper census plane: 4 x 4 cells and 4 starts, the times unchanged.
+
+    64 runs are cheap at the full times, and shorter ones would leave most runs
+    "unsettled".
+    """
+    census = dict(cfg.census)
+    census["values"] = tuple(np.linspace(a[0], a[-1], min(len(a), QUICK_PLANE))
+                             for a in census["values"])  # fmt: skip
+    census["n_starts"] = min(int(census.get("n_starts", QUICK_PLANE)), QUICK_PLANE)
+    return dataclasses.replace(cfg, census=census, title=cfg.title + " [quick]")
+
+
+def run_census(cfg: RunConfig, out: Path, threads: int | None = None) -> Path:
+    """Compute a census config into an HDF5 file (resumable), as ``stickslip-fast census``.
+
+    Parameters
+    ----------
+    cfg : RunConfig
+        A config with a ``[census]`` table.
+    out : Path
+        The census file; an existing file of the same configuration is resumed (a
+        finished one is only read back), one of another configuration is refused.
+    threads : int, optional
+        Numba threads.
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
+    c = dict(cfg.census)
+    integ = dict(cfg.integration)
+    if "stop" in integ:  # [integration].stop applies unless [census].stop says otherwise
+        c.setdefault("stop", integ.pop("stop"))
+    ssf.census(cfg.system, c.pop("param"), c.pop("values"), out=out, threads=threads,
+               progress=False, title=cfg.title, notes=cfg.notes, **c, **integ)  # fmt: skip
+    return out
+
+
+def _make_plane(plane: Plane, out: Path, quick: bool, fmt: str, threads: int | None) -> Path:
+    """Run one census plane (or resume it) and draw its maps with its curves."""
+    cfg = load_config(DATA / "maps" / plane.config)
+    if quick:
+        cfg = _quick_plane(cfg)
+    h5 = out / "data" / (Path(plane.config).stem + ("_quick" if quick else "") + ".h5")
+    run_census(cfg, h5, threads)
+    image = out / f"census_plane_{plane.name}.{fmt}"
+    curves = [DATA / "curves" / name for name in plane.curves]
+    return plot_census_plane.plot_plane(h5, image, curves, title=cfg.title)
+
+
 def make_figures(
     out: str | Path = "figures",
     *,
@@ -168,7 +253,8 @@ def make_figures(
     quick : bool
         Fewer values and shorter times (CI).
     only : set of str, optional
-        Figure numbers to make ("2", "06", ...); default all.
+        Figure numbers ("2", "06", ...) and plane names ("eta_k12", ...; "planes": all
+        of them) to make; default all.
     fmt : str
         Image format / extension ("png", "pdf").
     threads : int, optional
@@ -179,12 +265,12 @@ def make_figures(
     Returns
     -------
     dict
-        Figure number -> image path.
+        Figure number or plane name -> image path.
     """
     out = Path(out)
     data_dir = out / "data"
     data_dir.mkdir(parents=True, exist_ok=True)
-    wanted = None if only is None else {s.zfill(2) for s in only}
+    wanted = None if only is None else {s.zfill(2) if s.isdigit() else s for s in only}
     made: dict[str, Path] = {}
     t_all = time.perf_counter()
     for fig in FIGURES:
@@ -210,6 +296,16 @@ def make_figures(
         made[fig.number] = image
         if verbose:
             print(f"fig{fig.number}: {time.perf_counter() - t0:7.1f} s  -> {image}", flush=True)
+    for plane in PLANES:
+        if wanted is not None and not wanted & {plane.name, "planes"}:
+            continue
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*gave no orbit.*")
+            made[plane.name] = _make_plane(plane, out, quick, fmt, threads)
+        if verbose:
+            print(f"{plane.name}: {time.perf_counter() - t0:7.1f} s  -> {made[plane.name]}",
+                  flush=True)  # fmt: skip
     if verbose:
         print(f"total: {time.perf_counter() - t_all:.1f} s", flush=True)
     return made
@@ -220,7 +316,8 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default="figures", help="output folder (default figures/)")
     p.add_argument("--quick", action="store_true", help="few values, short times (CI)")
-    p.add_argument("--only", help="comma-separated figure numbers, e.g. 6,7")
+    p.add_argument("--only", help="comma-separated figure numbers and plane names, e.g. 6,7 or "
+                   "planes or eta_k12_folds")  # fmt: skip
     p.add_argument("--format", default="png", help="image format: png or pdf")
     p.add_argument("--threads", type=int, help="Numba threads for the sweeps")
     args = p.parse_args(argv)

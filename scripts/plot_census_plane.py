@@ -94,11 +94,58 @@ def draw_maps(res, axes=None, curves=()):
     return axes
 
 
-def main(argv: list[str] | None = None) -> int:
+def plot_plane(file, image, curve_files=(), title=None):
+    """Draw a census plane's three maps from its file, with curve files laid over them.
+
+    Parameters
+    ----------
+    file : str or Path
+        A census file over a plane (``stickslip-fast census`` with two params).
+    image : str or Path
+        The figure to write.
+    curve_files : sequence of str or Path
+        Curve files of :func:`stickslip_fast.continue_bifurcation` in the census's
+        two parameters.
+    title : str, optional
+        The figure's title (default: the file's).
+
+    Returns
+    -------
+    Path
+        ``image``.
+    """
+    import h5py
+
     from stickslip_fast.analysis.census import load_census
     from stickslip_fast.analysis.census_plane import CensusPlaneResult
     from stickslip_fast.bifurcation.curve import Curve
 
+    res = load_census(file)
+    if not isinstance(res, CensusPlaneResult):
+        raise ValueError(f"{file} is a census over one parameter; use scripts/plot_bifurcation.py")
+    curves = []
+    for path in curve_files:
+        curve = Curve.from_hdf5(path)
+        if (curve.param, curve.param2) != tuple(res.params):
+            raise ValueError(
+                f"{path} is a curve in ({curve.param}, {curve.param2}), the census in {res.params}"
+            )
+        curves.append((curve.values, {"color": "k", "lw": 1.4}))
+    fig, axes = plt.subplots(1, 3, figsize=(15.5, 4.4))
+    draw_maps(res, axes, curves)
+    with h5py.File(file, "r", libver="latest", swmr=True) as h5:
+        title = title if title is not None else str(h5.attrs.get("title", ""))
+    n1, n2 = res.shape
+    fig.suptitle(f"{title}  ({n1} x {n2} cells x {len(res.starts)} starts)", fontsize=10)
+    fig.tight_layout()
+    out = Path(image)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("file", metavar="CENSUS.h5")
     p.add_argument("-o", "--output", required=True, metavar="FIG.png")
@@ -106,29 +153,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--curve", action="append", default=[], metavar="CURVE.h5",
                    help="a curve file of continue_bifurcation to lay over the maps (repeatable)")  # fmt: skip
     args = p.parse_args(argv)
-    res = load_census(args.file)
-    if not isinstance(res, CensusPlaneResult):
-        p.error(f"{args.file} is a census over one parameter; use scripts/plot_bifurcation.py")
-    curves = []
-    for path in args.curve:
-        curve = Curve.from_hdf5(path)
-        if (curve.param, curve.param2) != tuple(res.params):
-            p.error(
-                f"{path} is a curve in ({curve.param}, {curve.param2}), the census in {res.params}"
-            )
-        curves.append((curve.values, {"color": "k", "lw": 1.4}))
-    fig, axes = plt.subplots(1, 3, figsize=(15.5, 4.4))
-    draw_maps(res, axes, curves)
-    import h5py
-
-    with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
-        title = args.title if args.title is not None else str(h5.attrs.get("title", ""))
-    n1, n2 = res.shape
-    fig.suptitle(f"{title}  ({n1} x {n2} cells x {len(res.starts)} starts)", fontsize=10)
-    fig.tight_layout()
-    out = Path(args.output)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=130, bbox_inches="tight")
+    try:
+        out = plot_plane(args.file, args.output, args.curve, args.title)
+    except ValueError as err:
+        p.error(str(err))
     print(f"wrote {out}")
     return 0
 

@@ -95,6 +95,12 @@ def test_curve_file_round_trip(tmp_path):
     assert back.codim2[0].kind == "extremum" and back.codim2[0].index == 0
     np.testing.assert_array_equal(back.codim2[0].values, [3.0, -0.83])
     assert back.status == "bounds"
+    # the file is xarray-readable (docs/file-format.md), as the branch files are
+    xr = pytest.importorskip("xarray")
+    with xr.open_dataset(tmp_path / "c.h5", engine="h5netcdf", phony_dims="sort") as ds:
+        np.testing.assert_array_equal(ds["values"].values, c.values)
+        np.testing.assert_array_equal(ds["T"].values, c.T)
+        assert ds.attrs["param2"] == "k12"
     with pytest.raises(ValueError, match="not a curve file"):
         import h5py
 

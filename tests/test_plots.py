@@ -178,7 +178,8 @@ def test_plot_scripts_make_images_from_small_files(tmp_path):
 
 
 def test_make_figures_quick_makes_one_file_per_figure(tmp_path):
-    made = make_figures.make_figures(tmp_path, quick=True, verbose=False)
+    figures = {f.number for f in make_figures.FIGURES}  # the planes: the test below
+    made = make_figures.make_figures(tmp_path, quick=True, only=figures, verbose=False)
     want = {f"{n:02d}" for n in (*range(2, 8), *range(9, 19))}
     assert set(made) == want
     assert sorted(p.name for p in tmp_path.glob("fig*.png")) == sorted(f"fig{n}.png" for n in want)
@@ -188,6 +189,24 @@ def test_make_figures_quick_makes_one_file_per_figure(tmp_path):
     used = {c for f in make_figures.FIGURES for c in f.configs}
     assert used == {p for p in os.listdir(os.path.join(ROOT, "data")) if p.startswith("fig")}
     load_config(os.path.join(ROOT, "data", sorted(used)[0]))
+
+
+def test_make_figures_draws_the_census_planes_with_their_curves(tmp_path):
+    from stickslip_fast.analysis.census import load_census
+
+    made = make_figures.make_figures(tmp_path, quick=True, only={"eta_k12_folds"}, verbose=False)
+    assert set(made) == {"eta_k12_folds"}
+    _check_png(made["eta_k12_folds"])
+    res = load_census(tmp_path / "data" / "census_plane_eta_k12_quick.h5")
+    assert res.params == ("eta", "k12") and res.shape == (4, 4) and len(res.starts) == 4
+    np.testing.assert_allclose(res.values[1], np.linspace(-0.95, -0.55, 4))
+    # every census plane in data/maps/ is drawn, and every curve file laid over one exists
+    used = {p.config for p in make_figures.PLANES}
+    assert used == {p for p in os.listdir(os.path.join(ROOT, "data", "maps"))
+                    if p.startswith("census_plane")}  # fmt: skip
+    for plane in make_figures.PLANES:
+        for name in plane.curves:
+            assert os.path.exists(os.path.join(ROOT, "data", "curves", name)), name
 
 
 def _fake_branch(system, period, values, stable, bifurcations=()):
