@@ -19,6 +19,8 @@ as JSON) where each branch ends:
         [--fixed-mesh]
         [--max-points N] [--out FILE]
 
+The run of 2026-11-27 (lower, upper, p4-multiple) is benchmarks/results/ms_far_sides.json.
+
 ``--fixed-mesh``: without re-meshing (the mesh refined once, at the start of the
 multiple-shooting branch), as before 2026-11-26.
 """
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import platform
 import sys
 import time
 from pathlib import Path
@@ -118,6 +121,22 @@ def p4_multiple(remesh: bool, max_points: int) -> dict:
     return p4(remesh, max_points, "multiple")
 
 
+def _machine() -> dict:
+    """The CPU and versions a result was computed with."""
+    import numba
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(
+                line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")
+            )
+    except (OSError, StopIteration):
+        pass
+    return {"cpu": cpu, "python": platform.python_version(), "numba": numba.__version__,
+            "numpy": np.__version__}  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     cases = {"upper": upper, "lower": lower, "p4": p4, "p4-multiple": p4_multiple}
@@ -127,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default=None, help="write the summaries as JSON here")
     args = p.parse_args(argv)
     res = [cases[c](not args.fixed_mesh, args.max_points) for c in args.cases]
+    for r in res:  # far past mu ~ 1e16 the ends differ from one CPU to another (docs/orbits.md)
+        r["machine"] = _machine()
     if args.out:
         Path(args.out).write_text(json.dumps(res, indent=1) + "\n")
     return 0

@@ -212,6 +212,17 @@ def test_the_walk_on_from_single_shooting_does_not_turn_back():
     assert _turns_back(came, probe(0.998))  # towards 0.9, the value before the crawl
     assert not _turns_back(came, probe(1.002))  # onwards, past the fold
     assert not _turns_back(came, probe(0.9995))  # not moved: the way on is kept
+    # the probe's move counts from its own first point: multiple shooting's multiplier at
+    # the branch's last point (0.9996) is offset from single shooting's (1.0004) by more
+    # than the move onwards (+2e-4), as at k12 = -0.8316's upper fold
+    past = SimpleNamespace(points=pts, values=came.values,
+                           multipliers=np.array([[0.5], [0.9], [0.9990], [1.0004]]))  # fmt: skip
+    onwards = SimpleNamespace(
+        values=np.array([2.0, 2.0]), multipliers=np.array([[0.9996], [0.9998]])
+    )
+    assert not _turns_back(past, onwards)
+    assert _turns_back(past, SimpleNamespace(values=np.array([2.0, 2.0]),
+                                             multipliers=np.array([[0.9996], [0.9994]])))  # fmt: skip
     # on the model: with direction +1 in eta but a chord down in eta, the walk goes down
     s = ssf.System.preset("asymmetric", eta=2.0)
     orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
@@ -346,3 +357,50 @@ def test_re_meshing_reaches_orbits_that_the_fixed_mesh_cannot(monkeypatch):
     fine_ms = MultiShooting(system, fine, 1e-12, 1e-14, 1e-12)
     mu_fd = abs(periodic_multipliers(fine_ms.section_factors(phis, _field(system, Y[0])))[0])
     assert abs(mu_fd / mu[-1] - 1) < 1e-2
+
+
+def test_an_appended_branch_does_not_locate_the_first_branch_s_fold_again():
+    # shooting="auto" appends the multiple-shooting walk to the single-shooting branch;
+    # at a sharp fold the two methods' multipliers differ by ~1e-4, so the walk can
+    # locate the fold the first branch ended past once more, 3e-12 away: one fold.
+    from stickslip_fast.bifurcation.branch import Bifurcation, Branch
+    from stickslip_fast.bifurcation.multishoot_branch import append_branch
+
+    s = ssf.System.preset("asymmetric", k12=-0.8316)
+
+    def branch(values, bifs):
+        n = len(values)
+        return Branch(s, "eta", 1, np.array(values), np.zeros((n, 4)), np.full(n, 12.0),
+                      np.ones((n, 3), complex), np.ones(n, bool),
+                      [Bifurcation(k, v, i, np.zeros(5)) for k, v, i in bifs], "x")  # fmt: skip
+
+    fold = 2.667348124830232
+    first = branch([2.6673, fold, fold - 1e-12], [("fold", fold, 0)])
+    second = branch([fold - 1e-12, fold - 2e-12, 2.6665],
+                    [("fold", fold - 3e-12, 0), ("fold", 2.6666, 1)])  # fmt: skip
+    joined = append_branch(first, second, "single shooting: precision-limit")
+    assert [(b.kind, b.value, b.index) for b in joined.bifurcations] == [
+        ("fold", fold, 0), ("fold", 2.6666, 3)]  # fmt: skip
+    assert joined.values.size == 5
+
+
+def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold():
+    # k12 = -0.8316, 1.1e-4 above where the period-1 region closes: the upper fold at
+    # eta = 2.6673481247 is so sharp that single shooting stops within 1e-11 of it, with
+    # mu = 1.0004 where multiple shooting gives 0.9996. "auto" goes on by multiple
+    # shooting along the saddle (mu > 1, down in eta), not back along the stable branch
+    # it came by (which it did while the probe compared the two methods' multipliers).
+    y0 = [0.11834572437245043, 0.0, 0.1459190815849308, -0.008125583378266665]
+    orbit = ssf.find_orbit(ssf.System.preset("asymmetric", eta=2.6, k12=-0.8316), np.array(y0), 1)
+    br = ssf.continue_orbit(orbit, "eta", (2.5, 2.7), ds=1e-3, ds_max=5e-3, max_points=70,
+                            shooting="auto", stick_events=False)  # fmt: skip
+    assert "then multiple shooting" in br.status, br.status
+    folds = [b for b in br.bifurcations if b.kind == "fold"]
+    assert len(folds) == 1 and abs(folds[0].value - 2.6673481247) < 1e-9, folds
+    # within ~1e-9 of the fold the walk wanders at the corrector's noise; then the saddle:
+    # mu grows from 1 to 59 while eta goes down, 4e-4 below the fold by point 70 (the walk
+    # that turned back had mu falling to 0.005 there, on the stable branch)
+    lead = np.max(np.abs(br.multipliers), axis=1)
+    last = slice(-30, None)
+    assert np.all(np.diff(lead[last]) > 0) and np.all(np.diff(br.values[last]) < 0)
+    assert lead[-1] > 20 and br.values[-1] < folds[0].value - 3e-4, (lead[-1], br.values[-1])

@@ -313,6 +313,30 @@ def test_stick_phases_match_the_reference_model(converged, eta, count):
     assert np.all(d > 0.05 * o.T)  # real stick phases, not flickers at the threshold
 
 
+def test_stick_phases_on_an_uneven_multiple_shooting_mesh(converged):
+    # Multiple shooting refines its mesh where a segment amplifies most, so its segments
+    # differ in length. Sampled from the segment starts as if the cuts were even, the
+    # P4 orbit at its period-doubling (2 stick phases) counted 19. Each segment is now
+    # sampled over its own length: the count and durations are the one-trajectory ones.
+    from stickslip_fast.bifurcation.multishoot import MultiShooting
+    from stickslip_fast.bifurcation.multishoot_orbit import initial_segments
+
+    s, run = converged[2.0]
+    o = ssf.find_orbit(s, run)
+    ref = ssf.stick_phases(s, o.points[0], o.T)
+    mesh = np.array([0.0, 0.02, 0.05, 0.3, 0.31, 0.7, 1.0])
+    status, starts = initial_segments(MultiShooting(s, mesh, 1e-11, 1e-13, 1e-13),
+                                      o.points[0], o.T)  # fmt: skip
+    assert status == "ok"
+    d = ssf.stick_phases(s, starts[0], o.T, starts=starts, mesh=mesh)
+    assert d.size == ref.size == 1
+    np.testing.assert_allclose(d, ref, atol=2.5 * o.T / 20000)
+    even = ssf.stick_phases(s, starts[0], o.T, starts=starts)  # the cuts taken as even
+    assert not np.allclose(even.sum(), ref.sum(), atol=2.5 * o.T / 20000)
+    with pytest.raises(ValueError, match="mesh"):
+        ssf.stick_phases(s, starts[0], o.T, starts=starts, mesh=mesh[:-1])
+
+
 def test_stick_phases_rejects_bad_input():
     s = ssf.System.preset("asymmetric", eta=2.0)
     with pytest.raises(ValueError, match="T"):

@@ -245,11 +245,14 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
             refine.append((ev, t2, d2))
         trigger = _RemeshTrigger(ms, system_at, limit) if remesh_ else None
+        # a crawl: the last steps together below the first stage's ds_min or its tol (steps
+        # smaller than the corrector's tolerance do not move the branch; a walk handed on by
+        # shooting="auto" has ds_min = 1e-16 and tol 1e-12, and crawled for 60+ points)
         xs, mults, bifs, status = pseudo_arclength(
             evaluate, x_start, direction, bounds, ds=ds, ds_min=ds_min, ds_max=kw["ds_max"],
             max_points=left, tol=tol, jump=_jump_test(ms, system_at), refine=refine,
             tests=multiplier_tests, spectrum=periodic_multipliers, orient=orient,
-            stall_ds_min=settings[0][3], stop=trigger,
+            stall_ds_min=max(settings[0][3], settings[0][0]), stop=trigger,
         )  # fmt: skip
         pieces.append(_Piece(ms, evaluate, tol, xs, np.asarray(mults), bifs))
         if status != "stopped":
@@ -277,7 +280,7 @@ def _stick_events(xs, starts, T, system_at, ms0, evaluate, tol, bifs):
 
     def geometry(x):
         Y, T_x = ms0.unpack(x[:-1])
-        d = stick_phases(system_at(x[-1]), Y[0], T_x, starts=Y)
+        d = stick_phases(system_at(x[-1]), Y[0], T_x, starts=Y, mesh=ms0.mesh)
         return d.size, float(d.sum())
 
     for i, x in enumerate(xs):
@@ -302,8 +305,16 @@ def append_branch(first: Branch, second: Branch, joined_at: str) -> Branch:
             return None
         return np.concatenate([a, b[1:]])
 
+    # a point the first branch located at its end, located again by the other method
+    # (their multipliers differ by ~1e-4 at a sharp fold: one fold, two places 3e-12 apart)
+    def again(b) -> bool:
+        return any(a.kind == b.kind and abs(a.value - b.value) <= 1e-9 * max(1.0, abs(a.value))
+                   for a in first.bifurcations)  # fmt: skip
+
     bifs = list(first.bifurcations) + [
-        Bifurcation(b.kind, b.value, k + b.index, b.point) for b in second.bifurcations
+        Bifurcation(b.kind, b.value, k + b.index, b.point)
+        for b in second.bifurcations
+        if not again(b)
     ]
     return Branch(
         system=first.system, param=first.param, period=first.period,

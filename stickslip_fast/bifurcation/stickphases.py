@@ -26,6 +26,7 @@ def stick_phases(
     rtol: float = 1e-10,
     atol: float = 1e-12,
     starts: np.ndarray | None = None,
+    mesh: np.ndarray | None = None,
 ) -> np.ndarray:
     """The stick phases of a periodic orbit: their durations, one per phase and disk.
 
@@ -49,10 +50,14 @@ def stick_phases(
     rtol, atol : float
         Integration tolerances.
     starts : ndarray, shape (m, n_state), optional
-        The states at times 0, T/m, ..., (m - 1) T/m (the segment starts of
-        multiple shooting, ``starts[0]`` = ``point``): each piece is sampled from
-        its own start, so that an unstable orbit's rounding is not amplified over
-        the whole period. ``n_samples`` is rounded up to a multiple of m.
+        The segment starts of multiple shooting (``starts[0]`` = ``point``): each
+        segment is sampled from its own start, so that an unstable orbit's rounding
+        is not amplified over the whole period.
+    mesh : ndarray, shape (m + 1,), optional
+        With ``starts``: the segments' cuts as fractions of T, from 0 to 1 (segment
+        i runs over [mesh[i] T, mesh[i + 1] T], as ``Orbit.segments`` and
+        :class:`.multishoot.MultiShooting` cut them); default even cuts. Each
+        segment gets at least its share of the ``n_samples`` samples.
 
     Returns
     -------
@@ -69,19 +74,37 @@ def stick_phases(
     if not (math.isfinite(T) and T > 0):
         raise ValueError(f"T must be a finite number > 0, got {T!r}")
     pieces = [y0] if starts is None else list(np.asarray(starts, dtype=float))
-    m = len(pieces)
-    per = -(-n_samples // m)
-    n_samples = per * m
-    dt = T / n_samples
-    ys = []
-    for y_start in pieces:
-        r = simulate(system, T / m, y0=y_start, sample_dt=dt, rtol=rtol, atol=atol, max_points=1)
-        ys.append(r.y[:per])
-        if ys[-1].shape[0] < per or not np.all(np.isfinite(ys[-1])):
+    cuts = _cuts(mesh, len(pieces))
+    ys, dts = [], []
+    for y_start, frac in zip(pieces, np.diff(cuts)):
+        # the segment's samples: n at spacing dt = frac T / n, from its own start
+        n = max(1, math.ceil(frac * n_samples))
+        dt = frac * T / n
+        r = simulate(system, frac * T, y0=y_start, sample_dt=dt, rtol=rtol, atol=atol,
+                     max_points=1)  # fmt: skip
+        ys.append(r.y[:n])
+        dts.append(np.full(n, dt))
+        if ys[-1].shape[0] < n or not np.all(np.isfinite(ys[-1])):
             raise ValueError(
                 f"the orbit could not be sampled over one period (status {r.status!r})"
             )
+    dt = np.concatenate(dts)
+    if np.all(dt == dt[0]):  # one spacing (one segment): durations as count x dt
+        dt = dt[0]
     return _phase_durations(system, np.concatenate(ys), T, dt, threshold)
+
+
+def _cuts(mesh, m: int) -> np.ndarray:
+    """The m segments' cuts as fractions of the period (even without ``mesh``), checked."""
+    if mesh is None:
+        return np.linspace(0.0, 1.0, m + 1)
+    cuts = np.asarray(mesh, dtype=float)
+    if cuts.shape != (m + 1,) or cuts[0] != 0.0 or cuts[-1] != 1.0 or np.any(np.diff(cuts) <= 0):
+        raise ValueError(
+            f"mesh must be {m + 1} increasing fractions of the period from 0 to 1 (one more "
+            f"than starts), got {mesh!r}"
+        )
+    return cuts
 
 
 def slip_velocity(system: System, y: np.ndarray, disk: int) -> tuple:
@@ -91,8 +114,9 @@ def slip_velocity(system: System, y: np.ndarray, disk: int) -> tuple:
     return y[..., 4 * disk + 1] - vb, y[..., 4 * disk + 3]
 
 
-def _phase_durations(system: System, y: np.ndarray, T: float, dt: float, threshold: float):
-    """The stick phases' durations in the samples y (one period, step dt), disk by disk."""
+def _phase_durations(system: System, y: np.ndarray, T: float, dt, threshold: float):
+    """The stick phases' durations in the samples y (one period; sample k stands for the
+    time dt[k] after it, or dt for a float), disk by disk."""
     n = system.n_oscillators
     out = []
     for i in range(n):
@@ -105,5 +129,9 @@ def _phase_durations(system: System, y: np.ndarray, T: float, dt: float, thresho
         k0 = int(np.argmin(stick))
         st = np.roll(stick, -k0)
         edges = np.flatnonzero(np.diff(np.r_[0, st.astype(np.int8), 0]))
-        out.extend(float((b - a) * dt) for a, b in zip(edges[::2], edges[1::2]))
+        if np.ndim(dt) == 0:
+            out.extend(float((b - a) * dt) for a, b in zip(edges[::2], edges[1::2]))
+        else:
+            w = np.roll(dt, -k0)
+            out.extend(float(w[a:b].sum()) for a, b in zip(edges[::2], edges[1::2]))
     return np.array(out)
