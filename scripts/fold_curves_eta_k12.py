@@ -43,14 +43,20 @@ CURVE_KW = {"upper": dict(tol=1e-10), "lower": dict(tol=1e-10),
             "closing": dict(tol=1e-9, h=1e-9)}  # fmt: skip
 
 
-def fold_curve(which: str, points: int) -> ssf.Curve:
-    """Locate the fold at the start's k12 and follow it towards lower k12 (the curve ends
-    where it comes back to that k12, or after ``points``)."""
+def locate_fold(which: str) -> tuple[ssf.Branch, ssf.Bifurcation]:
+    """(branch, fold): the period-1 branch in eta at the start's k12 and its fold."""
     eta, k12, y0, bounds, direction, ds = STARTS[which]
     orbit = ssf.find_orbit(ssf.System.preset("asymmetric", eta=eta, k12=k12), np.array(y0), 1)
     branch = ssf.continue_orbit(orbit, "eta", bounds, ds=ds, ds_max=5e-3, max_points=100,
                                 stick_events=False, direction=direction)  # fmt: skip
-    fold = next(b for b in branch.bifurcations if b.kind == "fold")
+    return branch, next(b for b in branch.bifurcations if b.kind == "fold")
+
+
+def fold_curve(which: str, points: int) -> ssf.Curve:
+    """Locate the fold at the start's k12 and follow it towards lower k12 (the curve ends
+    where it comes back to that k12, or after ``points``)."""
+    k12 = STARTS[which][1]
+    branch, fold = locate_fold(which)
     return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6 if k12 == -0.8 else k12),
                                     direction=-1, ds=0.005,
                                     ds_max=0.05, max_points=points, **CURVE_KW[which])  # fmt: skip

@@ -20,8 +20,9 @@ they never clash with the full ones.
 After the paper's figures it draws **the paper in the plane** (issue 28, docs/census.md):
 the censuses over (η, k12), (η, v_b) and, with the DC motor, (η, v_b0) for one and two
 disks, from the configs in ``data/maps/`` (streamed and resumable like the sweeps), into
-``OUT/census_plane_<name>.png``; ``eta_k12_folds`` lays the fold curves of
-``data/curves/`` (``scripts/fold_curves_eta_k12.py``) over the (η, k12) maps. In
+``OUT/census_plane_<name>.png``; ``eta_k12_folds`` and ``eta_vb_folds`` lay the fold
+curves of ``data/curves/`` (``scripts/fold_curves_eta_k12.py``,
+``scripts/fold_curves_eta_vb.py``) over the (η, k12) and (η, v_b) maps. In
 ``--quick`` a plane has 4 x 4 cells and 4 starts, at the full times. ``--only planes``
 makes the planes alone, ``--only eta_vb`` one of them.
 """
@@ -105,10 +106,14 @@ class Plane:
 _FOLDS = tuple(f"p1_fold_{name}_eta_k12.h5"
                for name in ("upper", "lower", "upper_resumed", "lower_resumed", "closing"))  # fmt: skip
 
+_FOLDS_VB = tuple(f"p1_fold_{which}_{way}_eta_vb.h5"
+                  for which in ("upper", "lower") for way in ("up", "down"))  # fmt: skip
+
 PLANES: tuple[Plane, ...] = (
     Plane("eta_k12", "census_plane_eta_k12.toml"),
     Plane("eta_k12_folds", "census_plane_eta_k12.toml", _FOLDS),
     Plane("eta_vb", "census_plane_eta_vb.toml"),
+    Plane("eta_vb_folds", "census_plane_eta_vb.toml", _FOLDS_VB),
     Plane("eta_vb0_dcmotor", "census_plane_eta_vb0_dcmotor.toml"),
     Plane("eta_vb0_dcmotor_N2", "census_plane_eta_vb0_dcmotor_N2.toml"),
 )

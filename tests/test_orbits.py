@@ -87,20 +87,22 @@ def test_multipliers_match_finite_differences_of_the_return_map(orbits, eta, per
 
 
 @pytest.mark.parametrize("eta, period", [(2.0, 1), (9.99, 2)])
-def test_parameter_column_matches_finite_differences_of_the_return_map(orbits, eta, period):
-    # dP^p/deta from the sensitivity integrated with the tangents, against a central
-    # difference of the map itself
+@pytest.mark.parametrize("param, h", [("eta", 1e-6), ("vb", 1e-7), ("eps", 1e-10)])
+def test_parameter_column_matches_finite_differences_of_the_return_map(orbits, eta, period,
+                                                                       param, h):  # fmt: skip
+    # dP^p/dparam from the sensitivity integrated with the tangents, against a central
+    # difference of the map itself. vb and eps act through the friction law's slip speed:
+    # with the old step (1e-7, 1 % of eps) dP/dvb at eta = 2 had the wrong sign
     o = orbits[eta]
     s = o.system
     z = o.points[0]
-    st, _, _, jac = return_map(s, z, period, param="eta")
+    st, _, _, jac = return_map(s, z, period, param=param)
     assert st == "ok" and jac.shape == (3, 4)
     np.testing.assert_allclose(jac[:, :3], o.jacobian, rtol=0, atol=1e-6)
-    h = 1e-6
     images = []
     for d in (h, -h):
-        st_d, pd, _, _ = return_map(dataclasses.replace(s, eta=eta + d), z, period,
-                                    tangents=False)  # fmt: skip
+        moved = dataclasses.replace(s, **{param: getattr(s, param) + d})
+        st_d, pd, _, _ = return_map(moved, z, period, tangents=False)
         assert st_d == "ok"
         images.append(pd[-1][SECTION])
     fd = (images[0] - images[1]) / (2 * h)

@@ -1,0 +1,68 @@
+"""The fold curves of Fig. 6's period-1 orbit in the (eta, v_b) plane (issue 28).
+
+The paper's belt speed v_b = 0.0112 lies just below the top of the period-1 region of
+the (eta, v_b) census (docs/census.md: period-1 cells up to v_b = 0.01125). This script
+locates the two folds of the period-1 branch in eta at k12 = -0.8, v_b = 0.0112 (as
+``scripts/fold_curves_eta_k12.py`` does) and follows each in v_b with
+:func:`stickslip_fast.continue_bifurcation`, up (towards where the region closes) and
+down (to v_b = 0.0025), writing ``data/curves/p1_fold_{upper,lower}_{up,down}_eta_vb.h5``.
+``scripts/plot_census_plane.py --curve`` lays them over the census maps of the plane.
+
+    python3 scripts/fold_curves_eta_vb.py [upper|lower ...] [--points 400] [--out data/curves]
+        [--directions up,down]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import fold_curves_eta_k12  # noqa: E402
+
+import stickslip_fast as ssf  # noqa: E402
+
+#: the v_b interval of the census plane (data/maps/census_plane_eta_vb.toml)
+VB_BOUNDS = (0.0025, 0.04)
+#: the curve's corrector tolerance and the test function's difference step (the closing
+#: settings of the (eta, k12) curves: a fold curve near its extremum needs h = 1e-9)
+CURVE_KW = dict(tol=1e-9, h=1e-9)
+
+
+def fold_curve_vb(which: str, direction: int, points: int) -> ssf.Curve:
+    """The fold ``which`` ("upper", "lower") followed in v_b up (+1) or down (-1)."""
+    branch, fold = fold_curves_eta_k12.locate_fold(which)
+    return ssf.continue_bifurcation(branch, fold, "vb", VB_BOUNDS, direction=direction,
+                                    ds=5e-3, ds_max=0.05, max_points=points,
+                                    **CURVE_KW)  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("which", nargs="*", default=["upper", "lower"], choices=["upper", "lower"])
+    p.add_argument("--points", type=int, default=400, help="points per curve (default 400)")
+    p.add_argument("--out", default="data/curves", help="folder of the curve files")
+    p.add_argument("--directions", default="up,down", help="up, down or both (default)")
+    args = p.parse_args(argv)
+    wanted = args.directions.split(",")
+    for which in args.which:
+        for direction, name in ((1, "up"), (-1, "down")):
+            if name not in wanted:
+                continue
+            t0 = time.perf_counter()
+            curve = fold_curve_vb(which, direction, args.points)
+            path = Path(args.out) / f"p1_fold_{which}_{name}_eta_vb.h5"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            curve.to_hdf5(path)
+            kinds = [(c.kind, [round(float(v), 10) for v in c.values]) for c in curve.codim2]
+            print(f"{which} {name}: {len(curve.values)} points to {curve.values[-1].tolist()} "
+                  f"({curve.status}, {time.perf_counter() - t0:.0f} s) codim2 {kinds} -> {path}",
+                  flush=True)  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
