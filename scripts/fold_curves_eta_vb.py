@@ -8,8 +8,14 @@ locates the two folds of the period-1 branch in eta at k12 = -0.8, v_b = 0.0112 
 down (to v_b = 0.0025), writing ``data/curves/p1_fold_{upper,lower}_{up,down}_eta_vb.h5``.
 ``scripts/plot_census_plane.py --curve`` lays them over the census maps of the plane.
 
-    python3 scripts/fold_curves_eta_vb.py [upper|lower ...] [--points 400] [--out data/curves]
-        [--directions up,down]
+``dc-motor`` does the same for Fig. 12's period-1 orbit (the asymmetric set on the DC
+motor) in (eta, v_b0), the motor's no-load belt speed: its stable interval in eta ends
+in a fold at the top (3.721570072) and in a grazing of the section at the bottom
+(1.458266356, not a codim-1 point that ``continue_bifurcation`` follows), so only the
+upper fold is followed (``p1_fold_upper_{up,down}_eta_vb0_dcmotor.h5``).
+
+    python3 scripts/fold_curves_eta_vb.py [upper|lower|dc-motor ...] [--points 400]
+        [--out data/curves] [--directions up,down]
 """
 
 from __future__ import annotations
@@ -32,17 +38,32 @@ VB_BOUNDS = (0.0025, 0.04)
 CURVE_KW = dict(tol=1e-9, h=1e-9)
 
 
+def dc_motor_fold() -> tuple[ssf.Branch, ssf.Bifurcation]:
+    """(branch, fold): Fig. 12's period-1 branch from eta = 2.0 up to its fold at 3.7216
+    (data/continuation/fig12_p1.toml, upwards only)."""
+    s = ssf.System.preset("asymmetric", drive="dc-motor", eta=2.0)
+    orbit = ssf.find_orbit(s, ssf.simulate(s, 3000.0, stop="converged"), 1)
+    branch = ssf.continue_orbit(orbit, "eta", (2.0, 4.0), ds=0.02, ds_max=0.05, max_points=200,
+                                stick_events=False)  # fmt: skip
+    return branch, next(b for b in branch.bifurcations if b.kind == "fold")
+
+
 def fold_curve_vb(which: str, direction: int, points: int) -> ssf.Curve:
-    """The fold ``which`` ("upper", "lower") followed in v_b up (+1) or down (-1)."""
-    branch, fold = fold_curves_eta_k12.locate_fold(which)
-    return ssf.continue_bifurcation(branch, fold, "vb", VB_BOUNDS, direction=direction,
+    """The fold ``which`` ("upper", "lower"; "dc-motor": Fig. 12's upper fold in v_b0)
+    followed in v_b up (+1) or down (-1)."""
+    if which == "dc-motor":
+        (branch, fold), param2 = dc_motor_fold(), "vb0"
+    else:
+        (branch, fold), param2 = fold_curves_eta_k12.locate_fold(which), "vb"
+    return ssf.continue_bifurcation(branch, fold, param2, VB_BOUNDS, direction=direction,
                                     ds=5e-3, ds_max=0.05, max_points=points,
                                     **CURVE_KW)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("which", nargs="*", default=["upper", "lower"], choices=["upper", "lower"])
+    p.add_argument("which", nargs="*", default=["upper", "lower"],
+                   choices=["upper", "lower", "dc-motor"])  # fmt: skip
     p.add_argument("--points", type=int, default=400, help="points per curve (default 400)")
     p.add_argument("--out", default="data/curves", help="folder of the curve files")
     p.add_argument("--directions", default="up,down", help="up, down or both (default)")
@@ -54,7 +75,8 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             t0 = time.perf_counter()
             curve = fold_curve_vb(which, direction, args.points)
-            path = Path(args.out) / f"p1_fold_{which}_{name}_eta_vb.h5"
+            stem = "upper_{}_eta_vb0_dcmotor" if which == "dc-motor" else which + "_{}_eta_vb"
+            path = Path(args.out) / f"p1_fold_{stem.format(name)}.h5"
             path.parent.mkdir(parents=True, exist_ok=True)
             curve.to_hdf5(path)
             kinds = [(c.kind, [round(float(v), 10) for v in c.values]) for c in curve.codim2]

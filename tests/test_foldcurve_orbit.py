@@ -42,6 +42,42 @@ def test_fold_curve_passes_through_one_parameter_folds():
         assert abs(fold_k.value - eta_c) < 1e-8, (k12, fold_k.value, eta_c)
 
 
+def test_a_change_of_stick_phases_along_a_curve_is_a_located_codim2_point(monkeypatch):
+    # The fold curve above keeps one stick phase per period (so no "stick-phase" point
+    # there). Injected: the orbit "gains" a stick phase below k12 = K. The curve names one
+    # codim-2 point "stick-phase", the first point past the change, on the curve and
+    # within 1e-8 of K in k12; with stick_events=False it names none.
+    import stickslip_fast.bifurcation.curve as curve_module
+
+    real, K = curve_module.stick_phases, -0.8015
+
+    def gains_one_below_k(system, point, T, **kw):
+        d = real(system, point, T, **kw)
+        return np.r_[d, 1.0] if system.k12 < K else d
+
+    monkeypatch.setattr(curve_module, "stick_phases", gains_one_below_k)
+    branch, fold = _fold_branch(-0.8, 3.30)
+    kw = dict(direction=-1, ds=0.002, ds_max=0.01, max_points=12)
+    curve = ssf.continue_bifurcation(branch, fold, "k12", (-0.806, -0.79), **kw)
+    events = [c for c in curve.codim2 if c.kind == "stick-phase"]
+    assert len(events) == 1 and len(curve.codim2) == 1, curve.codim2
+    eta_e, k12_e = events[0].values
+    assert K - 1e-8 <= k12_e < K, k12_e
+    i = events[0].index  # between curve points i and i + 1
+    assert curve.values[i, 1] >= K > curve.values[i + 1, 1]
+    assert (
+        min(curve.values[i + 1, 0], curve.values[i, 0]) <= eta_e <= max(curve.values[i : i + 2, 0])
+    )
+    # on the curve: the fold's multiplier at +1 (to the fold's square-root sensitivity)
+    s = branch.system.replace(eta=float(eta_e), k12=float(k12_e))
+    o = ssf.find_orbit(s, events[0].point, 1)
+    assert abs(abs(o.multipliers[0]) - 1) < 5e-3, o.multipliers
+    plain = ssf.continue_bifurcation(branch, fold, "k12", (-0.806, -0.79), stick_events=False,
+                                     **kw)  # fmt: skip
+    assert plain.codim2 == []
+    np.testing.assert_array_equal(plain.values, curve.values)
+
+
 # a point of Fig. 6's period-2 orbit near its period-doubling at eta = 5.042952433
 # (tests/test_continuation.py)
 P2_ETA = 5.043198103554579

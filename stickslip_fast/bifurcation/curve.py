@@ -17,6 +17,7 @@ import numpy as np
 
 from ..base.messages import plain
 from ..model.system import SWEEPABLE
+from .arclength import _locate_change
 from .branch import Bifurcation, Branch
 from .curverecord import Codim2Point, Curve
 from .detection import _sorted_eigs
@@ -25,6 +26,42 @@ from .foldcurve import CURVE_KINDS, follow_curve
 from .nscurve import NS_KIND, follow_ns_curve
 from .returnmap import SECTION_INDEX, return_map
 from .stickcurve import STICK_KIND, follow_stick_curve, nearest_stick_event
+from .stickphases import stick_phases
+
+
+class StickWatch:
+    """Counts the stick phases of the orbit at every point of a fold or period-doubling
+    curve, and locates where the count changes (:func:`.foldcurve.run_curve`'s ``watch``).
+
+    Such a place is a codim-2 point "stick-phase": the curve meets a stick-phase event
+    curve (:mod:`.stickcurve`), where the orbit's stick structure changes (the smoothed
+    counterpart of a curve leaving its smooth regime). ``count_at(x)`` gives the count at
+    a point of the curve; ``found`` collects (kind, index, x): x is the first point past
+    the change, located on the curve by bisection to ``locate_tol`` in param2.
+    """
+
+    def __init__(self, count_at, tol: float, locate_tol: float = 1e-8):
+        self.count_at, self.tol, self.locate_tol = count_at, tol, locate_tol
+        self.found: list = []
+        self.evaluate, self.prev = None, None
+
+    def _count(self, x):
+        try:
+            return int(self.count_at(x))
+        except ValueError:  # the orbit could not be sampled there
+            return -1
+
+    def start(self, evaluate, x_start):
+        self.evaluate, self.prev = evaluate, (x_start.copy(), self._count(x_start))
+
+    def __call__(self, x, walk):
+        count = self._count(x)
+        x_prev, c_prev = self.prev
+        if count >= 0 and c_prev >= 0 and count != c_prev:
+            loc = _locate_change(self.evaluate, x_prev, x, c_prev, self.count_at, self.tol,
+                                 self.locate_tol)  # fmt: skip
+            self.found.append(("stick-phase", len(walk.xs) - 2, loc))
+        self.prev = (x.copy(), count)
 
 
 def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
@@ -73,13 +110,13 @@ def continue_bifurcation(
     fd_step: float = 1e-7,
     h: float = 1e-7,
     lyap_step: float | None = None,
+    stick_events: bool = True,
 ) -> Curve:
     """Follow a fold, period-doubling or Neimark-Sacker point of periodic orbits, or a fold
     or Hopf point of equilibria, in a second parameter.
 
-    The curve is a minimally augmented system whose borders follow the null vectors:
-    where these have turned more than 60 degrees from the borders, the borders are
-    taken again at the last point (docs/orbits.md, "Borders along long curves").
+    A minimally augmented system whose borders are taken again where the null vectors
+    have turned by 60 degrees (docs/orbits.md, "Borders along long curves").
 
     Parameters
     ----------
@@ -99,10 +136,9 @@ def continue_bifurcation(
     direction : float
         +1: start towards increasing ``param2``; -1: decreasing.
     ds, ds_min, ds_max, max_points, tol : float
-        Of the pseudo-arclength continuation in (section coordinates, param,
-        param2) (equilibria: (state, param, param2), and omega^2 before the
-        parameters on a Hopf curve); ``tol`` on the residual and the test
-        functions together.
+        Of the pseudo-arclength continuation in (section coordinates, param, param2)
+        (equilibria: (state, param, param2), and omega^2 before the parameters on a
+        Hopf curve); ``tol`` on the residual and the test functions together.
     rtol, atol, fd_step : float
         Of the return map and its parameter sensitivities (:func:`continue_orbit`);
         equilibria: ``fd_step`` of the central differences in the parameters.
@@ -114,6 +150,9 @@ def continue_bifurcation(
         state for the first Lyapunov coefficient (the "bautin" test). Default
         0.01 ``eps``: the friction law varies on the scale eps (at the DC motor's
         Hopf point l1 = 1.2464e8 with steps 1e-6 to 1e-8, 1.8e9 with 1e-4).
+    stick_events : bool
+        Orbit fold and period-doubling curves: name a codim-2 point "stick-phase" where
+        the orbit's count of stick phases changes (located to 1e-8 in ``param2``).
 
     Returns
     -------
@@ -122,8 +161,8 @@ def continue_bifurcation(
     Raises
     ------
     ValueError
-        For a bifurcation of another kind, an unknown or equal ``param2``, or bounds that do not contain the
-        start (naming the argument).
+        For a bifurcation of another kind, an unknown or equal ``param2``, or bounds
+        without the start (naming the argument).
     """
     kind, system0, lo, hi = _check(branch, bifurcation, param2, bounds2)
     settings = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol)
@@ -133,10 +172,11 @@ def continue_bifurcation(
                                           lyap_step=lyap_step or 0.01 * system0.eps,
                                           **settings)  # fmt: skip
     return _orbit_curve(branch, bifurcation, param2, (lo, hi), system0, direction,
-                        (rtol, atol, fd_step, h), settings)  # fmt: skip
+                        (rtol, atol, fd_step, h), settings, stick_events)  # fmt: skip
 
 
-def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings):
+def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings,
+                 stick_events=False):  # fmt: skip
     """:func:`continue_bifurcation` for an orbit branch (arguments checked)."""
     rtol, atol, fd_step, h = steps
     kind, p, n = bifurcation.kind, branch.period, system0.n_state
@@ -163,8 +203,13 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
                                                   base, full, direction, bounds2,
                                                   (rtol, atol, fd_step), settings)  # fmt: skip
     else:
+        watch = None
+        if stick_events:
+            watch = StickWatch(_stick_counter(system0, branch.param, param2, p, full, periods,
+                                              rtol, atol), settings["tol"])  # fmt: skip
         xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
-                                                    spectrum=_sorted_eigs, **settings)  # fmt: skip
+                                                    spectrum=_sorted_eigs, watch=watch,
+                                                    **settings)  # fmt: skip
     if xs is None:
         xs, mults = x0[None, :], np.full((1, n - 1), np.nan, complex)
     T = np.array([periods.get(x.tobytes(), math.nan) for x in xs])
@@ -175,6 +220,23 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
         codim2=[Codim2Point(k, x[-2:].copy(), i, full(x)) for k, i, x in codim2],
         status=status, **extra,
     )  # fmt: skip
+
+
+def _stick_counter(system0, param, param2, period, full, periods, rtol, atol):
+    """count_at(x): the stick phases of the orbit at a curve point x = (z, param, param2)."""
+
+    def count_at(x):
+        s = dataclasses.replace(system0, **{param: float(x[-2]), param2: float(x[-1])})
+        T = periods.get(x.tobytes(), math.nan)
+        if not math.isfinite(T):
+            st, _, times, _ = return_map(s, full(x), period, rtol=rtol, atol=atol,
+                                         tangents=False)  # fmt: skip
+            if st != "ok":
+                raise ValueError(f"no return to the section: {st}")
+            T = float(times[-1])
+        return stick_phases(s, full(x), T).size
+
+    return count_at
 
 
 def _stick(branch, bifurcation, param2, system0, x0, base, full, direction, bounds2, steps,

@@ -219,13 +219,17 @@ def follow_curve(
                      **settings)  # fmt: skip
 
 
-def _never_stop(after_step):
-    """``after_step`` as :func:`pseudo_arclength`'s per-point ``stop`` hook, which never stops."""
-    if after_step is None:
+def _never_stop(after_step, watch=None):
+    """``after_step`` (and ``watch(x, walk)``) as :func:`pseudo_arclength`'s per-point
+    ``stop`` hook, which never stops."""
+    if after_step is None and watch is None:
         return None
 
     def stop(x, data, walk):
-        after_step(x)
+        if after_step is not None:
+            after_step(x)
+        if watch is not None:
+            watch(x, walk)
         return False
 
     return stop
@@ -245,12 +249,16 @@ def run_curve(
     tests: Callable = curve_tests,
     spectrum: Callable | None = None,
     locate_tol: float = 1e-9,
+    watch: Callable | None = None,
 ):
     """Continue the augmented system ``evaluate`` from x0 (corrected first at fixed l2, the
     last coordinate; l1 is the one before it) and name the codim-2 points.
 
     ``evaluate.after_step(x)``, where the evaluator has one (not None), is called at every
     accepted point after its tests (the borders' refresh of :func:`follow_curve`).
+    ``watch``, optional: ``watch.start(evaluate, x_start)`` before the walk and
+    ``watch(x, walk)`` at every accepted point after that; its ``found`` list of
+    (kind, index, x) is added to the codim-2 points (:class:`.curve.StickWatch`).
 
     Sign changes of "turn-1"/"turn-2" are a "cusp" where both parameter components of the
     tangent are below :data:`CUSP_SPEED`, else "turn-2" is an "extremum" (and "turn-1"
@@ -263,12 +271,14 @@ def run_curve(
     okc, x_start, _, _ = _correct(evaluate, x0, e2, x0, tol, 12)
     if not okc:
         return None, None, [], "start-failed", x0
+    if watch is not None:
+        watch.start(evaluate, x_start)
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x_start, direction, bounds2, ds=ds, ds_min=ds_min, ds_max=ds_max,
         max_points=max_points, tol=tol, locate_tol=locate_tol, tests=tests,
-        spectrum=spectrum, stop=_never_stop(getattr(evaluate, "after_step", None)),
+        spectrum=spectrum, stop=_never_stop(getattr(evaluate, "after_step", None), watch),
     )  # fmt: skip
-    codim2 = []
+    codim2 = [] if watch is None else list(watch.found)
     for name, _, index, x in bifs:
         if name not in ("turn-1", "turn-2"):
             codim2.append((name, index, x))
@@ -282,7 +292,7 @@ def run_curve(
     # a cusp shows as a sign change of one component and a double zero of the other:
     # keep one entry per place
     out = []
-    for entry in codim2:
+    for entry in sorted(codim2, key=lambda e: e[1]):
         if not out or entry[0] != out[-1][0] or abs(entry[1] - out[-1][1]) > 1:
             out.append(entry)
     return xs, mults, out, status, x_start
