@@ -78,6 +78,32 @@ def test_a_change_of_stick_phases_along_a_curve_is_a_located_codim2_point(monkey
     np.testing.assert_array_equal(plain.values, curve.values)
 
 
+def test_cli_continue_follows_the_fold_in_a_second_parameter(tmp_path, capsys):
+    # `stickslip-fast continue` with [continue].param2: the branch in eta to its upper
+    # fold, then the fold curve in k12 into OUTPUT.curve1.h5, equal to the API's curve
+    from stickslip_fast.cli import main
+
+    cfg = tmp_path / "fold.toml"
+    cfg.write_text(
+        '[system]\npreset = "asymmetric"\neta = 3.30\n'
+        f"[initial]\ny0 = {Z33.tolist()}\n"
+        "[integration]\nt_end = 3000.0\nstop = 'converged'\n"
+        "[continue]\nparam = 'eta'\nbounds = [3.30, 3.35]\nds = 2e-3\nds_max = 5e-3\n"
+        "max_points = 100\n"
+        "param2 = 'k12'\nbounds2 = [-0.801, -0.79]\ndirection2 = -1\n"
+    )  # fmt: skip
+    out = tmp_path / "fold.h5"
+    assert main(["continue", str(cfg), "-o", str(out), "--quiet"]) == 0
+    branch = ssf.Branch.from_hdf5(out)
+    folds = [b for b in branch.bifurcations if b.kind == "fold"]
+    assert len(folds) == 1 and abs(folds[0].value - 3.3236646195) < 1e-8
+    curve = ssf.Curve.from_hdf5(tmp_path / "fold.curve1.h5")
+    assert (curve.kind, curve.param, curve.param2, curve.status) == ("fold", "eta", "k12", "bounds")
+    assert curve.values[-1, 1] == -0.801 and curve.codim2 == []
+    ref = ssf.continue_bifurcation(branch, folds[0], "k12", (-0.801, -0.79), direction=-1)
+    np.testing.assert_allclose(curve.values, ref.values, rtol=0, atol=1e-12)
+
+
 # a point of Fig. 6's period-2 orbit near its period-doubling at eta = 5.042952433
 # (tests/test_continuation.py)
 P2_ETA = 5.043198103554579

@@ -42,6 +42,19 @@ def test_switch_by_multiple_shooting_equals_single_and_continues(p2_branch):
     assert np.all(np.diff(doubled.values) * away > 0)
 
 
+def test_switch_with_auto_takes_single_shooting_where_it_converges(p2_branch):
+    # "auto" polishes by single shooting and hands over to multiple shooting only where
+    # single shooting fails; at this period-doubling (mu 1.009) it converges, so "auto"
+    # gives the single-shooting orbit, bit for bit
+    br, pd = p2_branch
+    single = ssf.switch_branch(br, pd)
+    auto = ssf.switch_branch(br, pd, shooting="auto")
+    assert auto.converged and auto.period == 4 and auto.system == single.system
+    np.testing.assert_array_equal(auto.points, single.points)
+    assert auto.T == single.T
+    np.testing.assert_array_equal(auto.multipliers, single.multipliers)
+
+
 def test_switch_rejects_bad_shooting(p2_branch):
     br, pd = p2_branch
     with pytest.raises(ValueError, match="shooting"):
