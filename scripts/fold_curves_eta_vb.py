@@ -12,9 +12,13 @@ down (to v_b = 0.0025), writing ``data/curves/p1_fold_{upper,lower}_{up,down}_et
 motor) in (eta, v_b0), the motor's no-load belt speed: its stable interval in eta ends
 in a fold at the top (3.721570072) and in a grazing of the section at the bottom
 (1.458266356, not a codim-1 point that ``continue_bifurcation`` follows), so only the
-upper fold is followed (``p1_fold_upper_{up,down}_eta_vb0_dcmotor.h5``).
+upper fold is followed (``p1_fold_upper_{up,down}_eta_vb0_dcmotor.h5``). ``dc-motor-N2``
+follows the fold of two disks' period-1 orbit with the disks apart
+(``p1_fold_apart_{up,down}_eta_vb0_dcmotor_N2.h5``). In phase, two disks are one disk:
+the motor's equation sees their mean friction (beta / N times the sum), so their orbit,
+fold (3.7215700716) and fold curve are ``dc-motor``'s.
 
-    python3 scripts/fold_curves_eta_vb.py [upper|lower|dc-motor ...] [--points 400]
+    python3 scripts/fold_curves_eta_vb.py [upper|lower|dc-motor|dc-motor-N2 ...] [--points 400]
         [--out data/curves] [--directions up,down]
 """
 
@@ -48,10 +52,29 @@ def dc_motor_fold() -> tuple[ssf.Branch, ssf.Bifurcation]:
     return branch, next(b for b in branch.bifurcations if b.kind == "fold")
 
 
+#: a start of two disks on the DC motor at eta = 3 that settles on a period-1 orbit with
+#: the disks apart (x1 = 0.0809, x2 = 0.1414 at the section; multipliers 0.892, 0.223)
+N2_START = [0.05, 0.0, 0.0, 0.0, -0.05, 0.0, 0.0, 0.0, 0.0112]
+
+
+def dc_motor_n2_fold() -> tuple[ssf.Branch, ssf.Bifurcation]:
+    """(branch, fold): the period-1 orbit of two disks on the DC motor with the disks apart,
+    from eta = 3.0 up to its fold at 3.9768865. (With the disks in phase the orbit is one
+    disk's, the motor seeing their mean friction: its fold is Fig. 12's, 3.7215701.)"""
+    s = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=2, eta=3.0)
+    run = ssf.simulate(s, 20000.0, y0=N2_START, stop="converged")
+    orbit = ssf.find_orbit(s, run, 1)
+    branch = ssf.continue_orbit(orbit, "eta", (3.0, 4.2), ds=0.02, ds_max=0.05, max_points=120,
+                                stick_events=False)  # fmt: skip
+    return branch, next(b for b in branch.bifurcations if b.kind == "fold")
+
+
 def fold_curve_vb(which: str, direction: int, points: int) -> ssf.Curve:
-    """The fold ``which`` ("upper", "lower"; "dc-motor": Fig. 12's upper fold in v_b0)
-    followed in v_b up (+1) or down (-1)."""
-    if which == "dc-motor":
+    """The fold ``which`` ("upper", "lower"; "dc-motor": Fig. 12's upper fold in v_b0;
+    "dc-motor-N2": two disks apart on the motor) followed in v_b up (+1) or down (-1)."""
+    if which == "dc-motor-N2":
+        (branch, fold), param2 = dc_motor_n2_fold(), "vb0"
+    elif which == "dc-motor":
         (branch, fold), param2 = dc_motor_fold(), "vb0"
     else:
         (branch, fold), param2 = fold_curves_eta_k12.locate_fold(which), "vb"
@@ -63,7 +86,7 @@ def fold_curve_vb(which: str, direction: int, points: int) -> ssf.Curve:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("which", nargs="*", default=["upper", "lower"],
-                   choices=["upper", "lower", "dc-motor"])  # fmt: skip
+                   choices=["upper", "lower", "dc-motor", "dc-motor-N2"])  # fmt: skip
     p.add_argument("--points", type=int, default=400, help="points per curve (default 400)")
     p.add_argument("--out", default="data/curves", help="folder of the curve files")
     p.add_argument("--directions", default="up,down", help="up, down or both (default)")
@@ -75,7 +98,10 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             t0 = time.perf_counter()
             curve = fold_curve_vb(which, direction, args.points)
-            stem = "upper_{}_eta_vb0_dcmotor" if which == "dc-motor" else which + "_{}_eta_vb"
+            stem = {
+                "dc-motor": "upper_{}_eta_vb0_dcmotor",
+                "dc-motor-N2": "apart_{}_eta_vb0_dcmotor_N2",
+            }.get(which, which + "_{}_eta_vb")
             path = Path(args.out) / f"p1_fold_{stem.format(name)}.h5"
             path.parent.mkdir(parents=True, exist_ok=True)
             curve.to_hdf5(path)

@@ -20,11 +20,11 @@ they never clash with the full ones.
 After the paper's figures it draws **the paper in the plane** (issue 28, docs/census.md):
 the censuses over (η, k12), (η, v_b) and, with the DC motor, (η, v_b0) for one and two
 disks, from the configs in ``data/maps/`` (streamed and resumable like the sweeps), into
-``OUT/census_plane_<name>.png``; ``eta_k12_folds``, ``eta_vb_folds`` and
-``eta_vb0_dcmotor_folds`` lay the fold curves of ``data/curves/``
-(``scripts/fold_curves_eta_k12.py``, ``scripts/fold_curves_eta_vb.py``) over the maps. In
-``--quick`` a plane has 4 x 4 cells and 4 starts, at the full times. ``--only planes``
-makes the planes alone, ``--only eta_vb`` one of them.
+``OUT/census_plane_<name>.png``; ``eta_k12_folds``, ``eta_vb_folds``,
+``eta_vb0_dcmotor_folds`` and ``eta_vb0_dcmotor_N2_folds`` lay the fold curves of
+``data/curves/`` (``scripts/fold_curves_eta_k12.py``, ``scripts/fold_curves_eta_vb.py``)
+over the maps. In ``--quick`` a plane has 4 x 4 cells and 4 starts, at the full times.
+``--only planes`` makes the planes alone, ``--only eta_vb`` one of them.
 """
 
 from __future__ import annotations
@@ -121,6 +121,17 @@ PLANES: tuple[Plane, ...] = (
         ("p1_fold_upper_up_eta_vb0_dcmotor.h5", "p1_fold_upper_down_eta_vb0_dcmotor.h5"),
     ),
     Plane("eta_vb0_dcmotor_N2", "census_plane_eta_vb0_dcmotor_N2.toml"),
+    # in phase, two disks are one disk (Fig. 12's curve); apart, their own fold curve
+    Plane(
+        "eta_vb0_dcmotor_N2_folds",
+        "census_plane_eta_vb0_dcmotor_N2.toml",
+        (
+            "p1_fold_upper_up_eta_vb0_dcmotor.h5",
+            "p1_fold_upper_down_eta_vb0_dcmotor.h5",
+            "p1_fold_apart_up_eta_vb0_dcmotor_N2.h5",
+            "p1_fold_apart_down_eta_vb0_dcmotor_N2.h5",
+        ),
+    ),
 )
 
 QUICK_VALUES = 12
