@@ -11,6 +11,7 @@ equations and the parameter sensitivities, :func:`~stickslip_fast.bifurcation.re
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -30,8 +31,8 @@ from .stickphases import stick_phases
 
 
 class StickWatch:
-    """Counts the stick phases of the orbit at every point of a fold or period-doubling
-    curve, and locates where the count changes (:func:`.foldcurve.run_curve`'s ``watch``).
+    """Counts the stick phases of the orbit at every point of a fold, period-doubling or
+    Neimark-Sacker curve, and locates where the count changes (:func:`.foldcurve.run_curve`'s ``watch``).
 
     Such a place is a codim-2 point "stick-phase": the curve meets a stick-phase event
     curve (:mod:`.stickcurve`), where the orbit's stick structure changes (the smoothed
@@ -151,8 +152,8 @@ def continue_bifurcation(
         0.01 ``eps``: the friction law varies on the scale eps (at the DC motor's
         Hopf point l1 = 1.2464e8 with steps 1e-6 to 1e-8, 1.8e9 with 1e-4).
     stick_events : bool
-        Orbit fold and period-doubling curves: name a codim-2 point "stick-phase" where
-        the orbit's count of stick phases changes (located to 1e-8 in ``param2``).
+        Orbit fold, period-doubling and NS curves: name a codim-2 point "stick-phase"
+        where the orbit's count of stick phases changes (located to 1e-8 in ``param2``).
 
     Returns
     -------
@@ -189,10 +190,15 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
         z[mask] = x[:-2]
         return z
 
-    extra = {}
+    extra, watch = {}, None
+    if stick_events and kind != STICK_KIND:
+        count_at = _stick_counter(system0, branch.param, param2, p, full, periods, rtol, atol)
+        if kind == NS_KIND:  # x = (z, theta, l1, l2): theta apart
+            count_at = functools.partial(_without_theta, count_at, n - 1)
+        watch = StickWatch(count_at, settings["tol"])
     if kind == NS_KIND:
         xs, mults, codim2, status = follow_ns_curve(base, x0, direction, bounds2, h=h,
-                                                    **settings)  # fmt: skip
+                                                    watch=watch, **settings)  # fmt: skip
         extra["theta"] = np.full(1, np.nan)
         if xs is not None:  # x = (z, theta, l1, l2): theta apart
             extra["theta"] = xs[:, n - 1].copy()
@@ -203,10 +209,6 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
                                                   base, full, direction, bounds2,
                                                   (rtol, atol, fd_step), settings)  # fmt: skip
     else:
-        watch = None
-        if stick_events:
-            watch = StickWatch(_stick_counter(system0, branch.param, param2, p, full, periods,
-                                              rtol, atol), settings["tol"])  # fmt: skip
         xs, mults, codim2, status, _ = follow_curve(base, x0, kind, direction, bounds2, h=h,
                                                     spectrum=_sorted_eigs, watch=watch,
                                                     **settings)  # fmt: skip
@@ -220,6 +222,11 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
         codim2=[Codim2Point(k, x[-2:].copy(), i, full(x)) for k, i, x in codim2],
         status=status, **extra,
     )  # fmt: skip
+
+
+def _without_theta(count_at, i, x):
+    """``count_at`` at a Neimark-Sacker curve point x with its angle theta (x[i]) left out."""
+    return count_at(np.delete(x, i))
 
 
 def _stick_counter(system0, param, param2, period, full, periods, rtol, atol):

@@ -61,7 +61,7 @@ class Curve:
         "bogdanov-takens" (a second zero eigenvalue on a fold curve; omega -> 0 on a
         Hopf curve), "zero-hopf" (a pair +-i omega on a fold curve; a zero eigenvalue
         on a Hopf curve), "bautin" (the Hopf curve's first Lyapunov coefficient
-        changes sign). Orbit fold and period-doubling curves, with ``stick_events``:
+        changes sign). Orbit fold, period-doubling and NS curves, with ``stick_events``:
         "stick-phase" (the orbit's count of stick phases changes).
     status : str
         How the curve ended (:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s
