@@ -71,6 +71,11 @@ def _write(tmp_path, text, name="c.toml"):
             "kinds2",
         ),
         ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nkinds2 = ['fold']", "kinds2 need param2"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nstick_events = 1", "stick_events"),
+        (
+            "[continue]\nparam = 'beta'\nbounds = [1, 2]\nstart = 'sliding'\nstick_events = false",
+            "stick_events applies to start = 'orbit'",
+        ),
     ],
 )
 def test_bad_config_names_the_key(tmp_path, text, match):

@@ -89,7 +89,7 @@ def test_cli_continue_follows_the_fold_in_a_second_parameter(tmp_path, capsys):
         f"[initial]\ny0 = {Z33.tolist()}\n"
         "[integration]\nt_end = 3000.0\nstop = 'converged'\n"
         "[continue]\nparam = 'eta'\nbounds = [3.30, 3.35]\nds = 2e-3\nds_max = 5e-3\n"
-        "max_points = 100\n"
+        "max_points = 100\nstick_events = false\n"
         "param2 = 'k12'\nbounds2 = [-0.801, -0.79]\ndirection2 = -1\n"
     )  # fmt: skip
     out = tmp_path / "fold.h5"

@@ -56,6 +56,7 @@ Layout (every section optional except what the command needs)::
     # param2, bounds2, direction2, kinds2   (the codim-1 points' curves in a 2nd parameter)
     # switch = true       # also follow the doubled orbit from each period-doubling found
     # sharp_ends = false  # do not retry with tighter settings where the corrector fails
+    # stick_events = false  # do not count stick phases (branch and curves)
 
 Unknown sections or keys, and bad values, raise :class:`ConfigError` naming them.
 """
@@ -105,8 +106,8 @@ _SECTIONS = {
     "basins": None,  # keys checked by cli.basins.parse_basins_table
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
-        "max_points", "tol", "switch", "sharp_ends", "shooting", "segments", "param2", "bounds2",
-        "direction2", "kinds2",
+        "max_points", "tol", "switch", "sharp_ends", "stick_events", "shooting", "segments",
+        "param2", "bounds2", "direction2", "kinds2",
     },
 }  # fmt: skip
 
@@ -409,13 +410,14 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
         if table["switch"] and out.get("start", "orbit") != "orbit":
             raise ConfigError("[continue].switch applies to start = 'orbit' only")
         out["switch"] = table["switch"]
-    if "sharp_ends" in table:
-        v = table["sharp_ends"]
-        if not isinstance(v, bool):
-            raise ConfigError(f"[continue].sharp_ends must be true or false, got {plain(v)}")
-        if out.get("start", "orbit") != "orbit":
-            raise ConfigError("[continue].sharp_ends applies to start = 'orbit' only")
-        out["sharp_ends"] = v
+    for key in ("sharp_ends", "stick_events"):  # switches of orbit branches
+        if key in table:
+            v = table[key]
+            if not isinstance(v, bool):
+                raise ConfigError(f"[continue].{key} must be true or false, got {plain(v)}")
+            if out.get("start", "orbit") != "orbit":
+                raise ConfigError(f"[continue].{key} applies to start = 'orbit' only")
+            out[key] = v
     _parse_issue28_keys(table, out)
     return out
 

@@ -51,11 +51,11 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     if switch:
         _switch_and_follow(branch, bounds, c, args, say, switch_branch, continue_orbit)
     if curve:
-        _curves(branch, curve, c.get("tol", 1e-10), args, say)
+        _curves(branch, curve, c.get("tol", 1e-10), c.get("stick_events", True), args, say)
     return 0
 
 
-def _curves(branch, curve, tol, args, say):
+def _curves(branch, curve, tol, stick_events, args, say):
     """[continue].param2: every fold, period-doubling and Neimark-Sacker point of an orbit
     ``branch`` (every fold and Hopf point of an equilibrium branch; or the kinds of
     [continue].kinds2, e.g. "stick-phase") followed in param2, into OUTPUT's stem +
@@ -73,7 +73,8 @@ def _curves(branch, curve, tol, args, say):
             f"following the {bif.kind} at {branch.param} = {bif.value:.10g} in {curve['param2']} ..."
         )
         c = continue_bifurcation(branch, bif, curve["param2"], curve["bounds2"],
-                                 direction=curve.get("direction2", 1.0), tol=tol)  # fmt: skip
+                                 direction=curve.get("direction2", 1.0), tol=tol,
+                                 stick_events=stick_events)  # fmt: skip
         path = out.with_name(f"{out.stem}.curve{k}{out.suffix or '.h5'}")
         c.to_hdf5(path)
         if not args.quiet:
