@@ -139,3 +139,35 @@ def test_period_doubling_curve_passes_through_one_parameter_period_doublings():
         eta_c, k12 = (float(v) for v in curve.values[j])
         _, pd_k = _period_doubling(eta_c + 1e-4, k12, curve.points[j], eta_c - 1e-4, eta_c + 1e-4)
         assert abs(pd_k.value - eta_c) < 1e-8, (k12, pd_k.value, eta_c)
+
+
+def test_a_fold_curve_that_meets_a_grazing_of_the_section_ends_there():
+    # Fig. 6's upper period-1 fold followed down in v_b (data/curves, made by
+    # scripts/fold_curves_eta_vb.py) ends "step-too-small" at (4.0034, 0.0092064): there
+    # dx1 has an extremum at zero (-2.6e-8; 1.4e-4 twenty points earlier), the orbit
+    # grazes the section and the return map is no longer smooth. Resumed five points
+    # before that end, the curve stops at the same place and names it.
+    import os
+
+    from stickslip_fast.bifurcation.stickphases import section_graze_margin
+
+    stored = ssf.Curve.from_hdf5(os.path.join(os.path.dirname(__file__), "..", "data",
+                                              "curves", "p1_fold_upper_down_eta_vb.h5"))  # fmt: skip
+    i = len(stored.values) - 5
+    (eta, vb), z = (float(v) for v in stored.values[i]), stored.points[i]
+    branch = ssf.Branch(stored.system.replace(eta=eta, vb=vb), "eta", 1, np.array([eta]),
+                        z[None, :], np.full(1, np.nan), np.full((1, 3), np.nan, complex),
+                        np.zeros(1, bool))  # fmt: skip
+    fold = ssf.Bifurcation("fold", eta, 0, z.copy())
+    curve = ssf.continue_bifurcation(branch, fold, "vb", (0.0025, 0.04), direction=-1,
+                                     ds=1e-4, ds_min=1e-12, max_points=40,
+                                     stick_events=False)  # fmt: skip
+    assert curve.status == "step-too-small"
+    graze = [c for c in curve.codim2 if c.kind == "section-grazing"]
+    assert len(graze) == 1 and graze[0].index == len(curve.values) - 1, curve.codim2
+    np.testing.assert_allclose(graze[0].values, [4.0034242, 0.0092064], atol=2e-6)
+    # the margin shrinks along the stored curve: 1.7e-3 of max |dx1| at its point 160
+    # (0.02 in eta before the end), below GRAZE_TOL = 1e-5 only at the end
+    (eta_a, vb_a), z_a = stored.values[160], stored.points[160]
+    s_a = stored.system.replace(eta=float(eta_a), vb=float(vb_a))
+    assert section_graze_margin(s_a, z_a, float(stored.T[160])) > 1e-3

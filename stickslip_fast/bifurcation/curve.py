@@ -27,7 +27,7 @@ from .foldcurve import CURVE_KINDS, follow_curve
 from .nscurve import NS_KIND, follow_ns_curve
 from .returnmap import SECTION_INDEX, return_map
 from .stickcurve import STICK_KIND, follow_stick_curve, nearest_stick_event
-from .stickphases import stick_phases
+from .stickphases import GRAZE_TOL, section_graze_margin, stick_phases
 
 
 class StickWatch:
@@ -215,6 +215,13 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
     if xs is None:
         xs, mults = x0[None, :], np.full((1, n - 1), np.nan, complex)
     T = np.array([periods.get(x.tobytes(), math.nan) for x in xs])
+    if status in ("step-too-small", "precision-limit") and math.isfinite(T[-1]):
+        # a curve can stop where its orbit grazes the section: the return map is not
+        # smooth there (a crossing appears or vanishes), so the curve ends
+        s_end = dataclasses.replace(system0, **{branch.param: float(xs[-1, -2]),
+                                                param2: float(xs[-1, -1])})  # fmt: skip
+        if section_graze_margin(s_end, full(xs[-1]), float(T[-1])) < GRAZE_TOL:
+            codim2 = [*codim2, ("section-grazing", len(xs) - 1, xs[-1].copy())]
     return Curve(
         system=system0, param=branch.param, param2=param2, kind=kind, period=p,
         values=xs[:, -2:].copy(), points=np.array([full(x) for x in xs]), T=T,

@@ -62,7 +62,8 @@ class Curve:
         Hopf curve), "zero-hopf" (a pair +-i omega on a fold curve; a zero eigenvalue
         on a Hopf curve), "bautin" (the Hopf curve's first Lyapunov coefficient
         changes sign). Orbit fold, period-doubling and NS curves, with ``stick_events``:
-        "stick-phase" (the orbit's count of stick phases changes).
+        "stick-phase" (the orbit's count of stick phases changes); at a curve's end,
+        "section-grazing" (the orbit grazes the section there, so the curve stops).
     status : str
         How the curve ended (:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s
         statuses, or "start-failed"; a Neimark-Sacker curve also "1:1" or "1:2": it

@@ -135,3 +135,29 @@ def _phase_durations(system: System, y: np.ndarray, T: float, dt, threshold: flo
             w = np.roll(dt, -k0)
             out.extend(float(w[a:b].sum()) for a, b in zip(edges[::2], edges[1::2]))
     return np.array(out)
+
+
+#: A curve of orbits that stops where the orbit grazes the section (``dx1`` has an
+#: extremum within this fraction of max |dx1| of zero) ends at a "section-grazing" point.
+GRAZE_TOL = 1e-5
+
+
+def section_graze_margin(system: System, point: np.ndarray, T: float,
+                         n_samples: int = 200_000) -> float:  # fmt: skip
+    """How near the orbit through ``point`` (period T) comes to grazing the section.
+
+    The section is dx1 = 0 (the local minima of x1); the orbit grazes it where dx1 has
+    a local extremum at zero, and a crossing appears or vanishes there. Returns the
+    extremum of dx1 nearest zero over one period, in units of max |dx1| (inf for an
+    orbit without one; NaN if the orbit could not be sampled).
+    """
+    y0 = _finite_state("point", point, system.n_state)
+    r = simulate(system, T, y0=y0, sample_dt=T / n_samples, rtol=1e-11, atol=1e-13,
+                 max_points=1)  # fmt: skip
+    dx = r.y[:, 1]
+    if dx.size < 3 or not np.all(np.isfinite(dx)):
+        return math.nan
+    turn = np.flatnonzero((dx[1:-1] - dx[:-2]) * (dx[2:] - dx[1:-1]) < 0) + 1
+    if turn.size == 0:
+        return math.inf
+    return float(np.min(np.abs(dx[turn])) / np.max(np.abs(dx)))
