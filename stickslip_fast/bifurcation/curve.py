@@ -65,6 +65,11 @@ class StickWatch:
         self.prev = (x.copy(), count)
 
 
+def _system_at(system0, param, param2, x):
+    """``system0`` at a curve point x = (..., param, param2)."""
+    return dataclasses.replace(system0, **{param: float(x[-2]), param2: float(x[-1])})
+
+
 def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
     """base(x) of :func:`follow_curve` at x = (section coordinates, param, param2)."""
     n = system0.n_state
@@ -73,7 +78,7 @@ def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
 
     def base(x):
         try:
-            s = dataclasses.replace(system0, **{param: float(x[-2]), param2: float(x[-1])})
+            s = _system_at(system0, param, param2, x)
             s.to_array()
         except ValueError:
             return False, None, None, None
@@ -177,7 +182,7 @@ def continue_bifurcation(
 
 
 def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings,
-                 stick_events=False):  # fmt: skip
+                 stick_events):  # fmt: skip
     """:func:`continue_bifurcation` for an orbit branch (arguments checked)."""
     rtol, atol, fd_step, h = steps
     kind, p, n = bifurcation.kind, branch.period, system0.n_state
@@ -190,9 +195,10 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
         z[mask] = x[:-2]
         return z
 
+    system_at = functools.partial(_system_at, system0, branch.param, param2)
     extra, watch = {}, None
     if stick_events and kind != STICK_KIND:
-        count_at = _stick_counter(system0, branch.param, param2, p, full, periods, rtol, atol)
+        count_at = _stick_counter(system_at, p, full, periods, rtol, atol)
         if kind == NS_KIND:  # x = (z, theta, l1, l2): theta apart
             count_at = functools.partial(_without_theta, count_at, n - 1)
         watch = StickWatch(count_at, settings["tol"])
@@ -218,9 +224,7 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
     if status in ("step-too-small", "precision-limit") and math.isfinite(T[-1]):
         # a curve can stop where its orbit grazes the section: the return map is not
         # smooth there (a crossing appears or vanishes), so the curve ends
-        s_end = dataclasses.replace(system0, **{branch.param: float(xs[-1, -2]),
-                                                param2: float(xs[-1, -1])})  # fmt: skip
-        if section_graze_margin(s_end, full(xs[-1]), float(T[-1])) < GRAZE_TOL:
+        if section_graze_margin(system_at(xs[-1]), full(xs[-1]), float(T[-1])) < GRAZE_TOL:
             codim2 = [*codim2, ("section-grazing", len(xs) - 1, xs[-1].copy())]
     return Curve(
         system=system0, param=branch.param, param2=param2, kind=kind, period=p,
@@ -236,11 +240,11 @@ def _without_theta(count_at, i, x):
     return count_at(np.delete(x, i))
 
 
-def _stick_counter(system0, param, param2, period, full, periods, rtol, atol):
+def _stick_counter(system_at, period, full, periods, rtol, atol):
     """count_at(x): the stick phases of the orbit at a curve point x = (z, param, param2)."""
 
     def count_at(x):
-        s = dataclasses.replace(system0, **{param: float(x[-2]), param2: float(x[-1])})
+        s = system_at(x)
         T = periods.get(x.tobytes(), math.nan)
         if not math.isfinite(T):
             st, _, times, _ = return_map(s, full(x), period, rtol=rtol, atol=atol,
@@ -266,9 +270,7 @@ def _stick(branch, bifurcation, param2, system0, x0, base, full, direction, boun
     event = nearest_stick_event(system0, bifurcation.point, T0, rtol=rtol, atol=atol)
     info = {"disk": event.disk, "extremum": event.extremum, "threshold": event.threshold}
 
-    def system_at(x):
-        return dataclasses.replace(system0, **{branch.param: float(x[-2]), param2: float(x[-1])})
-
+    system_at = functools.partial(_system_at, system0, branch.param, param2)
     xs, mults, codim2, status, t_star = follow_stick_curve(
         base, system_at, full, x0, event, direction, bounds2, width=0.01 * T0,
         fd_step=max(fd_step, 1e-6), rtol=rtol, atol=atol, **settings,
