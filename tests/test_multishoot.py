@@ -1,6 +1,7 @@
 """Multiple shooting (issue 28, item 1): the periodic QR multipliers against analytic
 products, multiple against single shooting where both converge, and multiple shooting
-where single shooting stops, and re-meshing against the fixed mesh. About 27 s warm."""
+where single shooting stops, re-meshing against the fixed mesh, and an orbit of
+multiplier 1e8 against the independent SciPy model, segment by segment. About 40 s warm."""
 
 from __future__ import annotations
 
@@ -384,6 +385,31 @@ def test_an_appended_branch_does_not_locate_the_first_branch_s_fold_again():
     assert joined.values.size == 5
 
 
+def test_joined_branches_keep_each_point_s_segments():
+    # join_branches reverses the lower branch: its segments follow their points, and a
+    # branch without segments (single shooting) gives None at its points
+    from stickslip_fast.bifurcation.branch import Branch, join_branches
+
+    s = ssf.System.preset("asymmetric")
+
+    def branch(values, segments):
+        n = len(values)
+        pts = np.zeros((n, 4))
+        pts[:, 0] = values
+        return Branch(s, "eta", 1, np.array(values), pts, np.full(n, 12.0),
+                      np.ones((n, 3), complex), np.ones(n, bool), [], "x",
+                      segments=segments)  # fmt: skip
+
+    seg = {v: (np.linspace(0, 1, 3), np.full((2, 4), v)) for v in (2.0, 1.9, 1.8)}
+    lower = branch([2.0, 1.9, 1.8], [seg[2.0], seg[1.9], seg[1.8]])
+    upper = branch([2.0, 2.1], None)
+    joined = join_branches(lower, upper)
+    assert joined.values.tolist() == [1.8, 1.9, 2.0, 2.1]
+    assert [x if x is None else float(x[1][0, 0]) for x in joined.segments] == [
+        1.8, 1.9, None, None]  # fmt: skip
+    assert join_branches(branch([2.0, 1.9], None), upper).segments is None
+
+
 def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold():
     # k12 = -0.8316, 1.1e-4 above where the period-1 region closes: the upper fold at
     # eta = 2.6673481247 is so sharp that single shooting stops within 1e-11 of it, with
@@ -404,3 +430,46 @@ def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold():
     last = slice(-30, None)
     assert np.all(np.diff(lead[last]) > 0) and np.all(np.diff(br.values[last]) < 0)
     assert lead[-1] > 20 and br.values[-1] < folds[0].value - 3e-4, (lead[-1], br.values[-1])
+    # the segments of every point found by multiple shooting, None where single shooting
+    # found it; each (mesh, starts) starts at the point and re-converges where it is
+    n_single = next(i for i, seg in enumerate(br.segments) if seg is not None)
+    assert len(br.segments) == br.values.size and 0 < n_single < br.values.size - 30
+    assert all(seg is None for seg in br.segments[:n_single])
+    for i in (n_single + 1, br.values.size - 1):
+        mesh, starts = br.segments[i]
+        assert mesh[0] == 0 and mesh[-1] == 1 and starts.shape == (mesh.size - 1, 4)
+        assert np.array_equal(starts[0], br.points[i])
+    from stickslip_fast.bifurcation.multishoot_branch import ms_start
+
+    s_end = orbit.system.replace(eta=float(br.values[-1]))
+    x, _ = ms_start(s_end, br.points[-1], br.T[-1], "eta", 8, 1e-11, 1e-13, 1e-7, 1e-10,
+                    known=br.segments[-1])  # fmt: skip
+    assert x is not None and np.max(np.abs(x[:3] - br.points[-1][[0, 2, 3]])) < 1e-9
+    assert abs(x[-2] - br.T[-1]) < 1e-9
+
+
+def test_multiple_shooting_orbit_against_independent_scipy_segments():
+    # The orbit of multiplier 1.1e8 checked segment by segment by the independent SciPy
+    # model (tests/reference/scipy_segments.py: Radau with its variational equations,
+    # the leading multiplier by orthogonal iteration, no product formed). Over the whole
+    # period no integrator can follow it (1e8 x 1e-16 would be the best case), but each
+    # segment can be: the junctions close to 1e-12 and the multipliers agree to 1e-4.
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent / "reference"))
+    import scipy_segments as sg
+
+    o = unstable_orbit()
+    mesh, starts = o.segments
+    p = {**o.system.to_dict(), "n_oscillators": o.system.n_oscillators}
+    ref = sg.check_segments(p, mesh, starts, o.T)
+    assert ref["residual"] < 1e-10, ref["residuals"]
+    assert abs(ref["mu1"] / abs(o.multipliers[0]) - 1) < 1e-4, (ref["mu1"], o.multipliers[0])
+    # the check can fail: one segment's start moved by 1e-8 along the segment's most
+    # amplified direction (it amplifies by ~2e7 here) breaks its junction
+    k = int(np.argmax(ref["norms"]))
+    assert ref["norms"][k] > 1e6
+    v = np.linalg.svd(ref["factors"][k])[2][0]
+    y1, _ = sg.flow_segment(p, starts[k] + 1e-8 * v, (mesh[k + 1] - mesh[k]) * o.T)
+    assert np.max(np.abs(y1 - starts[(k + 1) % (mesh.size - 1)])) > 1e-3

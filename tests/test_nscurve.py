@@ -145,3 +145,29 @@ def test_ns_borders_follow_a_turning_complex_null_vector():
     np.testing.assert_allclose(xs[:, 4], NS_ANGLE, rtol=0, atol=1e-11)
     np.testing.assert_allclose(xs[:, :4], 0.0, atol=1e-11)
     assert codim2 == []
+
+
+def test_ns_curve_names_where_the_stick_count_changes():
+    # continue_bifurcation's stick watch on an NS curve (curve.StickWatch): the count is
+    # read at (z, l1, l2), the angle theta left out of the point (curve._without_theta).
+    # A count that steps from 1 to 2 where b falls through 0.2 is located there to 1e-8
+    # in b, with the curve's a and theta there.
+    import functools
+
+    from stickslip_fast.bifurcation.curve import StickWatch, _without_theta
+
+    seen = []
+
+    def count_at(x):  # x = (u, v, w, a, b): the curve point without theta
+        seen.append(x.size)
+        return 1 if x[-1] > 0.2 else 2
+
+    watch = StickWatch(functools.partial(_without_theta, count_at, 3), 1e-12)
+    x0 = _ns_from_branch(0.5)
+    xs, _, codim2, status = follow_ns_curve(family, x0, -1, (0.0, 3.0), watch=watch, **KW)
+    assert status == "bounds" and set(seen) == {5}
+    stick = [(i, x) for k, i, x in codim2 if k == "stick-phase"]
+    assert len(stick) == 1, codim2
+    i, x = stick[0]
+    assert abs(x[5] - 0.2) < 1e-8 and xs[i, 5] > 0.2 > xs[i + 1, 5]
+    np.testing.assert_allclose(x[[3, 4]], [math.acos(0.1), a_ns(0.2)], atol=1e-7)

@@ -85,6 +85,12 @@ class Branch:
         computed). None for equilibria.
     stick_time : ndarray, shape (k,), optional
         Total time per period spent sticking (NaN where not computed).
+    segments : list, optional
+        Multiple shooting only: at each point, ``(mesh, starts)`` as in
+        :attr:`Orbit.segments` (the mesh as fractions of T, and the segments' start
+        states), or None at a point found by single shooting. Only points whose
+        multiplier is far beyond 1/eps can be integrated again from these, not from
+        ``points`` alone. Kept in memory, not written to the branch file.
     """
 
     system: Any
@@ -99,6 +105,7 @@ class Branch:
     status: str = ""
     stick_count: np.ndarray | None = None
     stick_time: np.ndarray | None = None
+    segments: list | None = field(default=None, repr=False)
 
     def to_hdf5(self, path: str | Path) -> Path:
         """Write the branch to HDF5 (schema: docs/orbits.md, "Branch files").
@@ -282,4 +289,14 @@ def join_branches(lower: Branch, upper: Branch) -> Branch:
             if lower.stick_time is not None and upper.stick_time is not None
             else None
         ),  # fmt: skip
+        segments=(
+            segments_of(lower)[rev] + segments_of(upper)
+            if lower.segments is not None or upper.segments is not None
+            else None
+        ),  # fmt: skip
     )
+
+
+def segments_of(branch: Branch) -> list:
+    """``branch.segments``, or None at every point where it has none."""
+    return list(branch.segments) if branch.segments is not None else [None] * branch.values.size

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from .arclength import NOISE_FLOOR, _correct, _locate_change, pseudo_arclength
-from .branch import Bifurcation, Branch
+from .branch import Bifurcation, Branch, segments_of
 from .equilibria import EQUILIBRIUM_SPEED
 from .multishoot import REMESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh, remesh
 from .multishoot_orbit import initial_segments, newton_multiple
@@ -119,7 +119,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
         last = pieces[-1]
         last.bifs.append(("section-grazing", float(last.xs[-1][-1]), len(last.xs) - 1,
                           last.xs[-1].copy()))  # fmt: skip
-    vals, pts, Ts, mults, counts, times, bifs = [], [], [], [], [], [], []
+    vals, pts, Ts, mults, counts, times, bifs, segs = [], [], [], [], [], [], [], []
     for k, pc in enumerate(pieces):
         skip = 1 if k else 0  # a piece starts at its predecessor's last point, re-meshed
         off = len(vals) - skip
@@ -132,6 +132,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
             times.extend(t[skip:])
         vals.extend(pc.xs[skip:, -1])
         pts.extend(Y[0] for Y in starts[skip:])
+        segs.extend((pc.ms.mesh.copy(), Y) for Y in starts[skip:])
         Ts.extend(T[skip:])
         mults.extend(pc.mults[skip:])
         bifs.extend((b, v, i + off, pc.ms.unpack(x[:-1])[0][0]) for b, v, i, x in pc.bifs)
@@ -143,7 +144,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
         stable=np.all(np.abs(mults) < 1.0, axis=1),
         bifurcations=[Bifurcation(*b) for b in bifs], status=status,
         stick_count=np.array(counts, dtype=np.int64) if stick_events else None,
-        stick_time=np.array(times) if stick_events else None,
+        stick_time=np.array(times) if stick_events else None, segments=segs,
     )  # fmt: skip
 
 
@@ -324,4 +325,5 @@ def append_branch(first: Branch, second: Branch, joined_at: str) -> Branch:
         status=f"{joined_at}; then multiple shooting: {second.status}",
         stick_count=cat(first.stick_count, second.stick_count),
         stick_time=cat(first.stick_time, second.stick_time),
+        segments=segments_of(first) + segments_of(second)[1:],
     )  # fmt: skip
