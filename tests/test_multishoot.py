@@ -133,6 +133,11 @@ def test_multiple_shooting_converges_where_single_shooting_stops():
     np.testing.assert_allclose(branch.points[0], multi.points[0], rtol=0, atol=1e-10)
     mu = np.abs(branch.multipliers[:, 0])
     assert np.all(np.diff(mu) > 0) and 1e8 < mu[0] and mu[-1] < 2e8  # away from the fold
+    # a point of it as an Orbit again, from its own segments (from its point alone,
+    # find_orbit(shooting="multiple") cannot correct it: above)
+    last = branch.orbit_at(-1, tol=1e-11, rtol=1e-13, atol=1e-15)
+    assert last.converged and np.max(np.abs(last.points[0] - branch.points[-1])) < 1e-10
+    assert abs(abs(last.multipliers[0]) / mu[-1] - 1) < 1e-6
     # each point is an orbit for multiple shooting on another mesh too (16 even cuts)
     for eta, z, T in zip(branch.values[1:], branch.points[1:], branch.T[1:]):
         other = ssf.find_orbit(s.replace(eta=float(eta)), z, 1, shooting="multiple",
@@ -439,13 +444,17 @@ def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold():
         mesh, starts = br.segments[i]
         assert mesh[0] == 0 and mesh[-1] == 1 and starts.shape == (mesh.size - 1, 4)
         assert np.array_equal(starts[0], br.points[i])
-    from stickslip_fast.bifurcation.multishoot_branch import ms_start
-
-    s_end = orbit.system.replace(eta=float(br.values[-1]))
-    x, _ = ms_start(s_end, br.points[-1], br.T[-1], "eta", 8, 1e-11, 1e-13, 1e-7, 1e-10,
-                    known=br.segments[-1])  # fmt: skip
-    assert x is not None and np.max(np.abs(x[:3] - br.points[-1][[0, 2, 3]])) < 1e-9
-    assert abs(x[-2] - br.T[-1]) < 1e-9
+    # orbit_at: the end (mu = 59) corrected again on its own segments, and the start by
+    # single shooting from its point
+    end = br.orbit_at(-1)
+    assert end.converged and end.segments is not None and end.system.eta == br.values[-1]
+    assert np.max(np.abs(end.points[0] - br.points[-1])) < 1e-9 and abs(end.T - br.T[-1]) < 1e-9
+    assert abs(end.multipliers[0] - br.multipliers[-1][0]) < 1e-6 * lead[-1]
+    first = br.orbit_at(0)
+    assert first.converged and first.segments is None
+    assert np.max(np.abs(first.points[0] - br.points[0])) < 1e-9
+    with pytest.raises(ValueError, match="i must index"):
+        br.orbit_at(br.values.size)
 
 
 def test_multiple_shooting_orbit_against_independent_scipy_segments():

@@ -207,6 +207,52 @@ class Branch:
                 stick_time=stick_time,
             )
 
+    def orbit_at(self, i: int, *, tol: float = 1e-10, max_iter: int = 30,
+                 rtol: float = 1e-11, atol: float = 1e-13) -> Any:  # fmt: skip
+        """The orbit at point ``i``, corrected again: an :class:`Orbit` to plot, simulate
+        from, or continue in another parameter.
+
+        A point found by multiple shooting is corrected on its own segments
+        (:attr:`segments`), the only start from which an orbit far past a multiplier of
+        ~1e16 can be integrated again; a point found by single shooting by
+        :func:`find_orbit` from its section point.
+
+        Parameters
+        ----------
+        i : int
+            The point (negative counts from the end).
+        tol, max_iter, rtol, atol : float, int
+            Those of :func:`find_orbit` (the defaults are :func:`continue_orbit`'s).
+
+        Returns
+        -------
+        Orbit
+            Check ``converged``. Its ``segments`` are set for a multiple-shooting point.
+
+        Raises
+        ------
+        ValueError
+            For a branch of equilibria or an index out of range.
+        """
+        from .multishoot_orbit import find_orbit_multiple
+        from .orbits import find_orbit
+        from .returnmap import _TANGENT_ATOL
+
+        if self.period == 0:
+            raise ValueError("orbit_at needs a branch of periodic orbits, not of equilibria")
+        k = self.values.size
+        if not -k <= int(i) < k:
+            raise ValueError(f"i must index one of the {k} points, got {i}")
+        i = int(i) % k
+        system = self.system.replace(**{self.param: float(self.values[i])})
+        known = self.segments[i] if self.segments is not None else None
+        kw = dict(tol=tol, max_iter=max_iter, rtol=rtol, atol=atol)
+        if known is None:
+            return find_orbit(system, self.points[i], self.period, **kw)
+        return find_orbit_multiple(system, self.points[i], self.period, segments=0, t_max=1e4,
+                                   tangent_atol=_TANGENT_ATOL, T=float(self.T[i]), known=known,
+                                   **kw)  # fmt: skip
+
     def summary(self) -> str:
         """A few lines: range, stability, bifurcations and why the branch ended."""
         v = self.values

@@ -103,6 +103,16 @@ def _what_converged(system: System, y0: np.ndarray, points: np.ndarray, period: 
     return "converged", "", period
 
 
+def _failed_orbit(system: System, period: int, z) -> dict:
+    """The fields of an Orbit that was not found (z: the point it started from)."""
+    n = system.n_state
+    return dict(system=system, period=period, points=np.array(z, float)[None, :],
+                times=np.array([math.nan]), T=math.nan,
+                multipliers=np.full(n - 1, np.nan, complex), stable=False,
+                jacobian=np.full((n - 1, n - 1), np.nan), residual=math.inf,
+                iterations=0, converged=False)  # fmt: skip
+
+
 def find_orbit_multiple(
     system: System,
     z: np.ndarray,
@@ -116,22 +126,25 @@ def find_orbit_multiple(
     t_max: float,
     tangent_atol: float,
     T: float | None = None,
+    known: tuple[np.ndarray, np.ndarray] | None = None,
 ):
     """:func:`~stickslip_fast.bifurcation.orbits.find_orbit` with ``shooting="multiple"`` (its arguments).
 
-    ``T``: the period in time, if known (else from the p-th return of z).
+    ``T``: the period in time, if known (else from the p-th return of z). ``known``:
+    ``(mesh, starts)`` of the orbit already cut into segments (``Orbit.segments``,
+    ``Branch.segments``), used as they are, with ``T``, instead of ``segments`` even cuts
+    of one trajectory from z (which a very unstable orbit leaves within its period).
     """
+    if known is not None:
+        mesh, starts = (np.array(a, dtype=float) for a in known)
+        return _newton_orbit(system, mesh, starts, float(T), period, tol, max_iter,
+                             (rtol, atol, tangent_atol))  # fmt: skip
     ms = MultiShooting(system, segments, rtol, atol, tangent_atol)
-    n = system.n_state
     if T is None:
         st, _, times, _ = return_map(system, z, period, rtol=rtol, atol=atol, t_max=t_max,
                                      tangents=False)  # fmt: skip
         T = float(times[-1]) if st == "ok" else math.nan
-    nan_orbit = dict(system=system, period=period, points=np.array(z, float)[None, :],
-                     times=np.array([math.nan]), T=math.nan,
-                     multipliers=np.full(n - 1, np.nan, complex), stable=False,
-                     jacobian=np.full((n - 1, n - 1), np.nan), residual=math.inf,
-                     iterations=0, converged=False)  # fmt: skip
+    nan_orbit = _failed_orbit(system, period, z)
     st, Y = initial_segments(ms, z, T) if math.isfinite(T) else ("no-crossings", None)
     if st == "ok":
         # bisect the segments that amplify most (past a sharp fold: the capture into stick)
@@ -141,6 +154,14 @@ def find_orbit_multiple(
     if st != "ok":
         return Orbit(**nan_orbit, status="integration-failed",
                      message=f"no trajectory from the start to cut into segments: {st}")  # fmt: skip
+    return _newton_orbit(system, ms.mesh, Y, T, period, tol, max_iter, ms.kw)
+
+
+def _newton_orbit(system, mesh, Y, T, period, tol, max_iter, kw):
+    """The Orbit from segment starts Y on ``mesh`` and period T, by :func:`newton_multiple`
+    (its start moved to the crossing with the smallest x1 once converged)."""
+    ms = MultiShooting(system, mesh, *kw)
+    nan_orbit = _failed_orbit(system, period, Y[0])
     rotated = False
     total_it = 0
     while True:
