@@ -46,7 +46,9 @@ class Curve:
         Period in time (equilibria: NaN on a fold curve, 2 pi / omega on a Hopf curve,
         NaN past a Bogdanov-Takens point where omega^2 < 0).
     multipliers : ndarray of complex, shape (k, n_state - 1)
-        Floquet multipliers (one is +1 on a fold curve, -1 on a period-doubling curve);
+        Floquet multipliers (one is +1 on a fold curve, -1 on a period-doubling curve,
+        up to the sharpness of the fold: where the multiplier changes by O(1) over
+        1e-10 in the state, as on Fig. 6's lower fold in v_b, it can read 1.2-1.4);
         for equilibria, shape (k, n_state): the Jacobian's eigenvalues, largest real
         part first.
     codim2 : list of Codim2Point
