@@ -415,7 +415,7 @@ def test_joined_branches_keep_each_point_s_segments():
     assert join_branches(branch([2.0, 1.9], None), upper).segments is None
 
 
-def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold():
+def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold(tmp_path):
     # k12 = -0.8316, 1.1e-4 above where the period-1 region closes: the upper fold at
     # eta = 2.6673481247 is so sharp that single shooting stops within 1e-11 of it, with
     # mu = 1.0004 where multiple shooting gives 0.9996. "auto" goes on by multiple
@@ -455,6 +455,13 @@ def test_auto_goes_on_along_the_saddle_past_a_very_sharp_fold():
     assert np.max(np.abs(first.points[0] - br.points[0])) < 1e-9
     with pytest.raises(ValueError, match="i must index"):
         br.orbit_at(br.values.size)
+    # the segments travel with the branch file (a collaborator can correct a far point)
+    back = ssf.Branch.from_hdf5(br.to_hdf5(tmp_path / "saddle.h5"))
+    assert [x is None for x in back.segments] == [x is None for x in br.segments]
+    for a, b in zip(back.segments[n_single:], br.segments[n_single:]):
+        assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    again = back.orbit_at(-1)
+    assert again.converged and np.array_equal(again.points[0], end.points[0])
 
 
 def test_multiple_shooting_orbit_against_independent_scipy_segments():

@@ -90,7 +90,7 @@ class Branch:
         :attr:`Orbit.segments` (the mesh as fractions of T, and the segments' start
         states), or None at a point found by single shooting. Only points whose
         multiplier is far beyond 1/eps can be integrated again from these, not from
-        ``points`` alone. Kept in memory, not written to the branch file.
+        ``points`` alone. Written to the branch file and read back.
     """
 
     system: Any
@@ -114,7 +114,9 @@ class Branch:
         ``multipliers_real`` / ``multipliers_imag`` (point, multiplier), ``stable``
         (point), ``stick_count`` / ``stick_time`` (point; orbit branches),
         ``bifurcation_kind`` / ``bifurcation_value`` / ``bifurcation_index``
-        (bifurcation), ``bifurcation_point`` (bifurcation, state); attributes
+        (bifurcation), ``bifurcation_point`` (bifurcation, state); where the branch has
+        :attr:`segments`, ``segment_offsets`` (point + 1), ``segment_mesh`` (segment)
+        and ``segment_starts`` (segment, state); attributes
         ``kind = "branch"``, ``schema_version``, ``param``, ``period``, ``status``
         and ``system`` (JSON). Readable with
         ``xarray.open_dataset(path, engine="h5netcdf", phony_dims="sort")``.
@@ -150,6 +152,8 @@ class Branch:
                 if self.stick_count is not None:
                     h5["stick_count"] = np.asarray(self.stick_count, "i8")
                     h5["stick_time"] = np.asarray(self.stick_time, "f8")
+                if self.segments is not None and any(x is not None for x in self.segments):
+                    _write_segments(h5, self.segments, self.points.shape[1])
             tmp.replace(path)
         except BaseException:
             tmp.unlink(missing_ok=True)
@@ -192,6 +196,7 @@ class Branch:
             ]  # fmt: skip
             stick_count = h5["stick_count"][()] if "stick_count" in h5 else None
             stick_time = h5["stick_time"][()] if "stick_time" in h5 else None
+            segments = _read_segments(h5) if "segment_offsets" in h5 else None
             return cls(
                 system=System.from_dict(json.loads(h5.attrs["system"])),
                 param=str(h5.attrs["param"]),
@@ -205,6 +210,7 @@ class Branch:
                 status=str(h5.attrs["status"]),
                 stick_count=stick_count,
                 stick_time=stick_time,
+                segments=segments,
             )
 
     def orbit_at(self, i: int, *, tol: float = 1e-10, max_iter: int = 30,
@@ -341,6 +347,28 @@ def join_branches(lower: Branch, upper: Branch) -> Branch:
             else None
         ),  # fmt: skip
     )
+
+
+def _write_segments(h5, segments: list, n_state: int) -> None:
+    """Every point's (mesh, starts) as three flat datasets: point i's segments are rows
+    ``segment_offsets[i]:segment_offsets[i + 1]`` (none: no segments) of
+    ``segment_mesh`` (each segment's start as a fraction of T; the last ends at 1) and
+    ``segment_starts``."""
+    counts = [0 if x is None else len(x[0]) - 1 for x in segments]
+    h5["segment_offsets"] = np.r_[0, np.cumsum(counts)].astype("i8")
+    h5["segment_mesh"] = np.concatenate([x[0][:-1] for x in segments if x is not None])
+    starts = [np.asarray(x[1], "f8") for x in segments if x is not None]
+    h5["segment_starts"] = np.concatenate(starts).reshape(-1, n_state)
+
+
+def _read_segments(h5) -> list:
+    """The ``segments`` list of :func:`_write_segments`' datasets."""
+    off = h5["segment_offsets"][()]
+    mesh, starts = h5["segment_mesh"][()], h5["segment_starts"][()]
+    return [
+        None if b == a else (np.r_[mesh[a:b], 1.0], starts[a:b].copy())
+        for a, b in zip(off[:-1], off[1:])
+    ]
 
 
 def segments_of(branch: Branch) -> list:
