@@ -15,7 +15,7 @@ re-meshing and reports, for each half:
 
     PYTHONPATH=. python3 scripts/saddle_isola.py [--out FILE]
 
-About 5 min on a 2-core VM. docs/reproduction.md ("Where the period-1 region closes")
+About 2 min on a 2-core VM. docs/reproduction.md ("Where the period-1 region closes")
 quotes the run of 2026-11-27.
 """
 
@@ -37,13 +37,13 @@ import scipy_segments as sg  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
 from stickslip_fast.bifurcation.multishoot import MultiShooting  # noqa: E402
+from stickslip_fast.bifurcation.stickphases import STICK_SPEED  # noqa: E402
 
 K12 = -0.8316
 #: The stable orbit at eta = 2.6 (tests/test_multishoot.py)
 Y_STABLE = [0.11834572437245043, 0.0, 0.1459190815849308, -0.008125583378266665]
 #: Where the fixed-mesh runs reported a second stick phase (docs until 2026-11-27)
 OLD_STICK_ETA = {1: 2.6653695, -1: 2.5722440}
-STICK_BAND = 100.0  # slip speed in eps below which a disk sticks (stickphases.STICK_SPEED)
 
 
 def amplification(branch, i: int) -> dict:
@@ -64,7 +64,7 @@ def amplification(branch, i: int) -> dict:
         "mu": float(np.max(np.abs(branch.multipliers[i]))),
         "segments": int(mesh.size - 1),
         "log10_norms": total,
-        "share_in_stick_band": sum(r[1] for r in rows if r[2] < STICK_BAND) / total,
+        "share_in_stick_band": sum(r[1] for r in rows if r[2] < STICK_SPEED) / total,
         "top_segments": [{"t": t, "log10_norm": a, "slip_over_eps": sl} for t, a, sl in top],
     }
 
@@ -75,7 +75,7 @@ def scipy_stick_count(branch, i: int) -> int:
     s = branch.system.replace(eta=float(branch.values[i]))
     p = {**s.to_dict(), "n_oscillators": s.n_oscillators}
     y = sg.sample_segments(p, mesh, Y, float(branch.T[i]))
-    stick = np.hypot(y[:, 1] - s.vb, y[:, 3]) / s.eps < STICK_BAND
+    stick = np.hypot(y[:, 1] - s.vb, y[:, 3]) / s.eps < STICK_SPEED
     return int(np.sum(stick & ~np.roll(stick, 1)))
 
 
