@@ -88,9 +88,10 @@ class Branch:
     segments : list, optional
         Multiple shooting only: at each point, ``(mesh, starts)`` as in
         :attr:`Orbit.segments` (the mesh as fractions of T, and the segments' start
-        states), or None at a point found by single shooting. Only points whose
-        multiplier is far beyond 1/eps can be integrated again from these, not from
-        ``points`` alone. Written to the branch file and read back.
+        states), or None at a point found by single shooting. A point whose
+        multiplier is far beyond 1/eps can be integrated again only from these, not
+        from its section point alone (:meth:`orbit_at`). Written to the branch file and
+        read back.
     """
 
     system: Any
