@@ -6,6 +6,11 @@ once more on the cache it filled:
 
 - ``first_simulate``: import + the README's first ``ssf.simulate`` (asymmetric
   eta = 9.99, t_end 3000, t_transient 2000).
+- ``driver_floor``: the part of a first ``simulate`` that no change above the
+  driver can remove: ``trajectory._run`` (the classified run around ``drive``, the
+  step loop) compiled on its own, called from Python with records that a small
+  compiled setup built first (timed apart, in the same process). A first
+  ``simulate`` cannot compile in less than this without a smaller driver.
 - ``readme_main_job``: the README's first command,
   ``stickslip-fast sweep data/fig06_asymmetric_constant.toml -o out.h5`` (the Fig. 6
   diagram, 1000 values, all cores), as ``python -m stickslip_fast.cli``.
@@ -45,11 +50,49 @@ _SIMULATE = textwrap.dedent(
 )
 
 
+_DRIVER_FLOOR = textwrap.dedent(
+    """
+    import json, time
+    import numpy as np
+    from numba import njit
+    import stickslip_fast as ssf
+    from stickslip_fast.base.jit import JIT
+    from stickslip_fast.core import trajectory as tr
+
+    @njit(**dict(JIT, cache=False))  # code from -c has no file to cache against
+    def setup(method, n, n_osc, dc, variant, rs, pts, tpts, samples):
+        obs = tr._make_observer(rs, pts, tpts, samples, 1.0, n)
+        rec = tr.method_record(method, variant)
+        stop = tr._stop_rule(rs, n_osc, dc, n)
+        return rec, obs, stop, tr.alloc_bordered_linear(n_osc, n), tr.alloc_workspace(rec, n)
+
+    system = ssf.System.preset("asymmetric", eta=9.99)
+    n_osc, dc = system.n_oscillators, system.is_dc_motor
+    n = 4 * n_osc + int(dc)
+    rs = ssf.core.settings.Settings.resolve(t_end=3000.0, t_transient=2000.0).run_settings()
+    variant = tr.method_variant(0, n_osc, dc)
+    t0 = time.perf_counter()
+    rec, obs, stop, lin, ws = setup(0, n, n_osc, dc, variant, rs, np.empty((64, n)),
+                                    np.empty(64), np.empty((0, n)))
+    t1 = time.perf_counter()
+    istat = np.zeros(2 + tr.N_AUTO_STATS, dtype=np.int64)
+    status = tr._run(rec, system.initial_state(None), system.to_array(), n_osc, dc, variant, rs,
+                     np.empty(tr.N_PARAMS), lin, ws, obs, stop, np.empty(n), istat, np.zeros(2),
+                     tr.NO_ABORT)
+    t2 = time.perf_counter()
+    assert status == 0 and obs.counts[0] > 0, (status, obs.counts)
+    print(json.dumps(dict(setup_s=round(t1 - t0, 2), driver_s=round(t2 - t1, 2))))
+    """
+)
+
+
 def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
     """One fresh process: its wall time and CPU time (user + system of the child)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(root))
     if job == "first_simulate":
         cmd = [sys.executable, "-c", _SIMULATE]
+    elif job == "driver_floor":
+        cmd = [sys.executable, "-c", _DRIVER_FLOOR]
     else:
         config = str(root / "data" / "fig06_asymmetric_constant.toml")
         out = os.path.join(workdir, "fig06.h5")
@@ -64,7 +107,10 @@ def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
     if proc.returncode != 0:
         raise RuntimeError(f"{job} failed in {root}:\n{proc.stderr[-3000:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return dict(wall_s=round(wall, 2), cpu_s=round(cpu, 2))
+    rec = dict(wall_s=round(wall, 2), cpu_s=round(cpu, 2))
+    if job == "driver_floor":  # the child's own split: setup compile, then the driver's
+        rec.update(json.loads(proc.stdout.strip().splitlines()[-1]))
+    return rec
 
 
 def _summary(runs: list[dict]) -> dict:
@@ -75,7 +121,7 @@ def _summary(runs: list[dict]) -> dict:
     )
 
 
-JOBS = ("first_simulate", "readme_main_job")
+JOBS = ("first_simulate", "driver_floor", "readme_main_job")
 
 
 def run(roots=(ROOT,), repeats: int = 3, log=print, jobs=JOBS) -> dict:

@@ -17,7 +17,6 @@ from ..core.settings import (
     DEFAULT_EQUILIBRIUM_TOL,
     DEFAULT_MAX_STEPS,
     DEFAULT_RTOL,
-    STOP_KINDS,
     Settings,
     check_memory,
     check_real,
@@ -38,7 +37,6 @@ from ..core.trajectory import (
     N_STAT_I,
     integrate,
     method_variant,
-    run_settings,
     unroll_ring,
 )
 from ..model.system import System, warn_if_synchronous
@@ -220,10 +218,7 @@ def _run_kernel(
     system: System, s: Settings, y_init: np.ndarray, sample_dt: float | None, b: _RunBuffers
 ) -> int:
     """Run the compiled trajectory kernel (interruptible); its status code."""
-    rs = run_settings(
-        s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
-        s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
-    )  # fmt: skip
+    rs = s.run_settings()
     method = METHODS.index(s.method)
     n_osc, dc = system.n_oscillators, system.is_dc_motor
     return call_interruptible(

@@ -20,8 +20,7 @@ import numpy as np
 
 from ..base.interrupt import call_interruptible, new_abort_flag
 from ..base.status import ST_NOT_COMPUTED
-from ..core.poincare import MAX_PERIOD
-from ..core.settings import STOP_KINDS, Settings
+from ..core.settings import Settings
 from ..core.sweep_kernels import continuation_chunk, sweep_chunk
 from ..core.trajectory import (
     AUTO_TOKEN,
@@ -30,7 +29,6 @@ from ..core.trajectory import (
     SWEEP_INT_FIELDS,
     kernel_variant,
     method_variant,
-    run_settings,
 )
 from ..model.system import PARAM_INDEX, System
 
@@ -58,10 +56,7 @@ def _param_rows(system: System, names: Sequence[str], values: np.ndarray) -> np.
 
 def _kernel_args(system: System, s: Settings) -> tuple:
     """(n_osc, dc, variant, run settings, max_points): the kernels' arguments after the parameters."""
-    rs = run_settings(
-        s.t_end, s.t_transient, s.rtol, s.atol, s.h, s.max_steps, s.equilibrium_tol,
-        s.period_tol, MAX_PERIOD, STOP_KINDS.index(s.stop), s.dwell,
-    )  # fmt: skip
+    rs = s.run_settings()
     n_osc, dc = system.n_oscillators, system.is_dc_motor
     # trajectory.method_variant, through this module's kernel_variant (which
     # benchmarks/converged.py swaps for the generic kernel)

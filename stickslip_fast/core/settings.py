@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 
 from ..base.messages import plain
-from .trajectory import METHODS
+from .poincare import MAX_PERIOD
+from .trajectory import METHODS, RunSettings, run_settings
 
 __all__ = [
     "Settings",
@@ -314,3 +315,11 @@ class Settings:
     def replace(self, **changes: Any) -> Settings:
         """A copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
+
+    def run_settings(self) -> RunSettings:
+        """The :class:`~stickslip_fast.core.trajectory.RunSettings` the compiled kernels take."""
+        return run_settings(
+            self.t_end, self.t_transient, self.rtol, self.atol, self.h, self.max_steps,
+            self.equilibrium_tol, self.period_tol, MAX_PERIOD, STOP_KINDS.index(self.stop),
+            self.dwell,
+        )  # fmt: skip

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
+from typing import Any
 
 import numpy as np
 from numba import njit, types
@@ -113,44 +114,33 @@ def _all_finite(a) -> bool:
     return True
 
 
-#: The settings of a trajectory, as the kernels pass them on. ``stop_kind``:
-#: STOP_FIXED (run to t_end) or STOP_WHEN_CONVERGED (see :func:`stoprules.converged_stop`).
+STOP_FIXED, STOP_WHEN_CONVERGED = 0, 1
+
+#: The settings of a trajectory, as the kernels pass them on: (name, type,
+#: default) of each field, None where the caller must give it. ``h_fixed`` > 0
+#: takes fixed steps; ``stop_kind`` is STOP_FIXED (run to t_end) or
+#: STOP_WHEN_CONVERGED (see :func:`stoprules.converged_stop`; ``dwell`` is then
+#: the time at rest that counts as an equilibrium).
+_RUN_FIELDS = (
+    ("t_end", float, None), ("t_transient", float, None), ("rtol", float, None),
+    ("atol", float, None), ("h_fixed", float, 0.0), ("max_steps", int, 20_000_000),
+    ("equilibrium_tol", float, 1e-4), ("period_tol", float, 1e-5), ("max_period", int, 64),
+    ("stop_kind", int, STOP_FIXED), ("dwell", float, 200.0),
+)  # fmt: skip
 RunSettings = namedtuple(
-    "RunSettings",
-    [
-        "t_end", "t_transient", "rtol", "atol", "h_fixed", "max_steps", "equilibrium_tol",
-        "period_tol", "max_period", "stop_kind", "dwell",
-    ],
+    "RunSettings", [name for name, _, _ in _RUN_FIELDS],
+    defaults=[default for _, _, default in _RUN_FIELDS if default is not None],
 )  # fmt: skip
 
 
-STOP_FIXED, STOP_WHEN_CONVERGED = 0, 1
-
-
-def run_settings(
-    t_end: float,
-    t_transient: float,
-    rtol: float,
-    atol: float,
-    h_fixed: float = 0.0,
-    max_steps: int = 20_000_000,
-    equilibrium_tol: float = 1e-4,
-    period_tol: float = 1e-5,
-    max_period: int = 64,
-    stop_kind: int = STOP_FIXED,
-    dwell: float = 200.0,
-) -> RunSettings:
+def run_settings(*args: Any, **kwargs: Any) -> RunSettings:
     """A :class:`RunSettings` with the types the kernels are compiled for.
 
-    ``h_fixed`` > 0 takes fixed steps; ``stop_kind`` is STOP_FIXED or
-    STOP_WHEN_CONVERGED (then ``dwell`` is the time at rest that counts as an
-    equilibrium). Validation is :class:`stickslip_fast.core.settings.Settings`' job.
+    Takes :class:`RunSettings`' fields (positional or by name; the first four
+    are required). Validation is :class:`stickslip_fast.core.settings.Settings`' job.
     """
-    return RunSettings(
-        float(t_end), float(t_transient), float(rtol), float(atol), float(h_fixed),
-        int(max_steps), float(equilibrium_tol), float(period_tol), int(max_period),
-        int(stop_kind), float(dwell),
-    )  # fmt: skip
+    given = RunSettings(*args, **kwargs)
+    return RunSettings(*(kind(v) for (_, kind, _), v in zip(_RUN_FIELDS, given)))
 
 
 #: Converged stopping: points repeat over >= 3 periods and >= 8 points.
