@@ -36,7 +36,9 @@ sys.path.insert(0, str(ROOT / "scripts"))
 sys.path.insert(0, str(ROOT / "tests" / "reference"))
 
 import scipy_segments as sg  # noqa: E402
-from ms_far_sides import CASES, _machine  # noqa: E402
+from ms_far_sides import CASES  # noqa: E402
+
+from benchmarks.common import machine_info  # noqa: E402
 
 #: Decades of the leading multiplier at which a point is checked
 DECADES = tuple(range(4, 48, 4))
@@ -94,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name}: {branch.values.size} points, {branch.status} ({seconds:.0f} s)", flush=True)
         checks = [check_point(branch, i) for i in points_to_check(branch)]
         res.append({"case": name, "status": branch.status, "points": int(branch.values.size),
-                    "engine_seconds": seconds, "checks": checks, "machine": _machine()})  # fmt: skip
+                    "engine_seconds": seconds, "checks": checks, "machine": machine_info()})  # fmt: skip
     if args.out:
         Path(args.out).write_text(json.dumps(res, indent=1) + "\n")
     return 0

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import sys
 import time
 from pathlib import Path
@@ -40,6 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import stickslip_fast as ssf  # noqa: E402
+from benchmarks.common import machine_info  # noqa: E402
 
 # The unstable P1 orbit past the upper fold (multiplier 1.1e8; tests/test_multishoot.py)
 ETA_UNSTABLE = 3.323525498113908
@@ -122,22 +122,6 @@ def p4_multiple(remesh: bool, max_points: int):
     return p4(remesh, max_points, "multiple")
 
 
-def _machine() -> dict:
-    """The CPU and versions a result was computed with."""
-    import numba
-
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(
-                line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")
-            )
-    except (OSError, StopIteration):
-        pass
-    return {"cpu": cpu, "python": platform.python_version(), "numba": numba.__version__,
-            "numpy": np.__version__}  # fmt: skip
-
-
 CASES = {"upper": upper, "lower": lower, "p4": p4, "p4-multiple": p4_multiple}
 
 
@@ -155,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     res = [summary(*cases[c](not args.fixed_mesh, args.max_points)) for c in args.cases or cases]
     for r in res:  # far past mu ~ 1e16 the ends differ from one CPU to another (docs/orbits.md)
-        r["machine"] = _machine()
+        r["machine"] = machine_info()
     if args.out:
         Path(args.out).write_text(json.dumps(res, indent=1) + "\n")
     return 0

@@ -57,6 +57,16 @@ def _write(tmp_path, text, name="c.toml"):
         ("[system\neta = 2", "invalid TOML"),
         ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nshooting = 'double'", "shooting"),
         ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nsegments = 0", "segments"),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nmax_segments = 4", "max_segments.*>= 8"),
+        (
+            "[continue]\nparam = 'eta'\nbounds = [1, 2]\nsegments = 12\nmax_segments = 10",
+            "max_segments.*>= 12",
+        ),
+        ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nremesh = true", "remesh"),
+        (
+            "[continue]\nparam = 'eta'\nbounds = [1, 2]\nshooting = 'auto'\nremesh = 1",
+            "remesh",
+        ),
         ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nparam2 = 'eta'\nbounds2 = [0, 1]", "param2"),
         ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nparam2 = 'k12'\nbounds2 = [0]", "bounds2"),
         ("[continue]\nparam = 'eta'\nbounds = [1, 2]\nbounds2 = [0, 1]", "param2"),
@@ -91,6 +101,8 @@ def test_continue_table_takes_the_issue_28_keys(tmp_path):
     assert c["bounds2"] == (-0.9, -0.7) and c["direction2"] == -1.0 and "kinds2" not in c
     c = load_config(_write(tmp_path, text + "\nkinds2 = ['neimark-sacker', 'stick-phase']"))
     assert c.continuation["kinds2"] == ("neimark-sacker", "stick-phase")
+    c = load_config(_write(tmp_path, text + "\nremesh = true\nmax_segments = 128")).continuation
+    assert (c["remesh"], c["max_segments"]) == (True, 128)
 
 
 def test_param2_for_an_equilibrium_continuation(tmp_path):

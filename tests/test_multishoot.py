@@ -194,6 +194,44 @@ def test_a_remeshed_branch_keeps_to_the_orbits_of_the_fixed_mesh(monkeypatch):
         ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True)
 
 
+def test_max_segments_caps_the_mesh_not_the_orbit(monkeypatch):
+    # The orbit past the upper fold (mu = 1.1e8), found on 14 segments: the continuation
+    # refines its mesh where a segment amplifies by more than MESH_LIMIT, to 29 segments by
+    # default (measured), to exactly max_segments = 20 here, and finds the same orbits.
+    from stickslip_fast.bifurcation import multishoot_branch
+
+    orbit = unstable_orbit()
+    kw = dict(ds=3e-5, ds_max=1e-3, max_points=3, direction=-1, shooting="multiple",
+              tol=1e-12, rtol=1e-12, atol=1e-14, stick_events=False, sharp_ends=False)  # fmt: skip
+    full = ssf.continue_orbit(orbit, "eta", (3.3, 3.33), **kw)
+    capped = ssf.continue_orbit(orbit, "eta", (3.3, 3.33), max_segments=20, **kw)
+    assert full.status == capped.status == "max-points", (full.status, capped.status)
+    assert [seg[0].size - 1 for seg in full.segments] == [29] * 3
+    assert [seg[0].size - 1 for seg in capped.segments] == [20] * 3
+    np.testing.assert_allclose(capped.points[0], full.points[0], rtol=0, atol=1e-9)
+    assert abs(capped.multipliers[0][0] / full.multipliers[0][0] - 1) < 1e-6
+    with pytest.raises(ValueError, match="max_segments must be an integer >= segments"):
+        ssf.continue_orbit(orbit, "eta", (3.3, 3.33), max_segments=4, **kw)  # segments: 8
+    with pytest.raises(ValueError, match="max_segments"):
+        ssf.continue_orbit(orbit, "eta", (3.3, 3.33), max_segments=True, **kw)
+
+    # the re-mesh along the branch gets the cap too
+    caps = []
+    remesh = multishoot_branch.remesh
+
+    def spy(*args, **kwargs):
+        caps.append(kwargs.get("max_segments"))
+        return remesh(*args, **kwargs)
+
+    monkeypatch.setattr(multishoot_branch, "REMESH_LIMIT", 0.5)  # a re-mesh at every point
+    monkeypatch.setattr(multishoot_branch, "remesh", spy)
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    stable = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    ssf.continue_orbit(stable, "eta", (1.9, 2.1), ds=0.01, ds_max=0.02, max_points=3,
+                       shooting="multiple", stick_events=False, remesh=True, max_segments=9)  # fmt: skip
+    assert caps and set(caps) == {9}, caps
+
+
 def test_the_walk_on_from_single_shooting_does_not_turn_back():
     # Where single shooting stops at a fold it can cross it and crawl back within 1e-11 in
     # eta (k12 = -0.8316, eta = 2.5706), so neither the sign of its last step nor its

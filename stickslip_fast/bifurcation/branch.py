@@ -242,7 +242,7 @@ class Branch:
             For a branch of equilibria or an index out of range.
         """
         from .multishoot_orbit import find_orbit_multiple
-        from .orbits import find_orbit
+        from .orbits import DEFAULT_T_MAX, find_orbit
         from .returnmap import _TANGENT_ATOL
 
         if self.period == 0:
@@ -256,9 +256,9 @@ class Branch:
         kw = dict(tol=tol, max_iter=max_iter, rtol=rtol, atol=atol)
         if known is None:
             return find_orbit(system, self.points[i], self.period, **kw)
-        return find_orbit_multiple(system, self.points[i], self.period, segments=0, t_max=1e4,
-                                   tangent_atol=_TANGENT_ATOL, T=float(self.T[i]), known=known,
-                                   **kw)  # fmt: skip
+        return find_orbit_multiple(system, self.points[i], self.period, segments=0,
+                                   t_max=DEFAULT_T_MAX, tangent_atol=_TANGENT_ATOL,
+                                   T=float(self.T[i]), known=known, **kw)  # fmt: skip
 
     def summary(self) -> str:
         """A few lines: range, stability, bifurcations and why the branch ended."""

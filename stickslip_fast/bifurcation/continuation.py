@@ -46,8 +46,6 @@ from .equilibrium_branch import (  # noqa: F401
 )
 from .orbit_branch import (  # noqa: F401
     SHARP_END_STAGES,
-    _check_args,
-    _difference,
     _orbit_evaluator,
     continue_orbit,
 )
@@ -56,6 +54,7 @@ from .switching import (  # noqa: F401
     period_doubling_start,
     switch_branch,
 )
+from .walk_args import _check_args, _difference  # noqa: F401
 
 __all__ = [
     "Branch",

@@ -12,8 +12,8 @@ import numpy as np
 from ..model.equations import dense_jacobian
 from .curverecord import Codim2Point, Curve
 from .hopfcurve import follow_equilibrium_fold, follow_hopf_curve
-from .orbit_branch import _difference
 from .returnmap import _field
+from .walk_args import _difference
 
 #: The codim-1 kinds of equilibria that :func:`continue_equilibrium_curve` follows.
 EQUILIBRIUM_CURVE_KINDS = ("fold", "hopf")

@@ -10,11 +10,11 @@ from ..model.equations import dense_jacobian
 from .arclength import pseudo_arclength
 from .branch import Bifurcation, Branch
 from .detection import _eigs_by_real_part, _equilibrium_tests
-from .orbit_branch import _check_args, _difference
 from .orbits import (
     Equilibrium,
     _field,
 )
+from .walk_args import _check_args, _difference
 
 
 # ------------------------------------------------------------------ equilibria

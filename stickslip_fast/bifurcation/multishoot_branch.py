@@ -15,7 +15,14 @@ import numpy as np
 from .arclength import NOISE_FLOOR, _correct, _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch, segments_of
 from .equilibria import EQUILIBRIUM_SPEED
-from .multishoot import REMESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh, remesh
+from .multishoot import (
+    MAX_SEGMENTS,
+    REMESH_LIMIT,
+    MultiShooting,
+    periodic_multipliers,
+    refine_mesh,
+    remesh,
+)
 from .multishoot_orbit import initial_segments, newton_multiple
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
@@ -64,11 +71,11 @@ def ms_evaluator(system0, param: str, segments: int, rtol: float, atol: float, f
 
 
 def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit=None,
-             known=None):  # fmt: skip
+             known=None, max_segments=MAX_SEGMENTS):  # fmt: skip
     """(x, mesh): x = (u, lambda) of the orbit through z (period T) on the section, corrected
     by Newton at fixed lambda, or None if it does not converge. With ``mesh_limit``, the
-    mesh is refined where a segment amplifies more than that (:func:`refine_mesh`) and
-    the orbit corrected again on it. ``known``: (mesh, starts) of the orbit already cut
+    mesh is refined where a segment amplifies more than that (:func:`refine_mesh`, up to
+    ``max_segments``) and the orbit corrected again on it. ``known``: (mesh, starts) of the orbit already cut
     into segments (``Orbit.segments``); they replace ``segments`` and the one trajectory
     from z, which for a very unstable orbit leaves it within the period."""
     if known is not None:
@@ -84,7 +91,7 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
     status, _, u, _, _, _, _ = newton_multiple(ms, ms.pack(Y, T), tol, 12)
     if status == "converged" and mesh_limit is not None:
         Y, T = ms.unpack(u)
-        mesh = refine_mesh(ms, Y, T, mesh_limit)
+        mesh = refine_mesh(ms, Y, T, mesh_limit, max_segments)
         st, Y = ms.states_at(Y, T, mesh[:-1] * T, mesh=ms.mesh)
         _, _, shooting_at = ms_evaluator(system, param, mesh, rtol, atol, fd_step)
         ms = shooting_at(getattr(system, param), None)
@@ -96,12 +103,13 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
 
 def continue_multiple(system0, param, period, x0, direction, bounds, *, segments, ds, ds_min,
                       ds_max, max_points, tol, rtol, atol, fd_step, stick_events,
-                      sharp_ends, stages, remesh=False, chord=None) -> Branch:  # fmt: skip
+                      sharp_ends, stages, remesh=False, chord=None,
+                      max_segments=MAX_SEGMENTS) -> Branch:  # fmt: skip
     """The branch through x0 = (u, lambda) by multiple shooting (``continue_orbit``'s arguments;
     ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
     segments are cut again (:func:`.multishoot.remesh`) wherever one amplifies by more
-    than :data:`.multishoot.REMESH_LIMIT`; the branch is then followed in pieces, one per
-    mesh (:func:`walk_pieces`). ``chord``: (d_state, d_lambda), the way the branch goes on
+    than :data:`.multishoot.REMESH_LIMIT` (into at most ``max_segments``); the branch is
+    then followed in pieces, one per mesh (:func:`walk_pieces`). ``chord``: (d_state, d_lambda), the way the branch goes on
     from x0 (a section point's change and the parameter's: the tangent of the walk that
     came to x0); when given, the first tangent is oriented along it instead of by
     ``direction`` in lambda, which is undefined at a fold."""
@@ -113,7 +121,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
                 settings.append(nxt)
     kw = dict(ds=ds, ds_max=ds_max, max_points=max_points, fd_step=fd_step)
     pieces, status = walk_pieces(system0, param, x0, direction, bounds, segments, settings,
-                                 remesh, dict(kw, chord=chord))  # fmt: skip
+                                 remesh, dict(kw, chord=chord, max_segments=max_segments))  # fmt: skip
     _, system_at, _ = ms_evaluator(system0, param, segments, rtol, atol, fd_step)
     if status == "nonsmooth":
         last = pieces[-1]
@@ -163,12 +171,17 @@ class _Piece:
 
 class _RemeshTrigger:
     """``pseudo_arclength``'s ``stop``: True where a segment of ``ms`` amplifies by more
-    than the limit and :func:`remesh` gives another mesh (kept in ``mesh``, with the
-    walk's step size and the number of its stages left). ``system_at``: the system at a
-    parameter value, at which :func:`remesh` integrates the point's segments."""
+    than the limit and :func:`remesh` gives another mesh of at most ``max_segments``
+    segments (kept in ``mesh``, with the walk's step size and the number of its stages
+    left). ``system_at``: the system at a parameter value, at which :func:`remesh`
+    integrates the point's segments."""
 
-    def __init__(self, ms: MultiShooting, system_at, limit: float = REMESH_LIMIT) -> None:
+    def __init__(
+        self, ms: MultiShooting, system_at, limit: float = REMESH_LIMIT,
+        max_segments: int = MAX_SEGMENTS,
+    ) -> None:  # fmt: skip
         self.ms, self.system_at, self.limit = ms, system_at, limit
+        self.max_segments = max_segments
         self.mesh, self.ds, self.stages_left, self.limit_hit = None, math.nan, 0, math.nan
 
     def __call__(self, x, A, walk) -> bool:
@@ -177,7 +190,7 @@ class _RemeshTrigger:
             return False
         Y, T = self.ms.unpack(x[:-1])
         ms = MultiShooting(self.system_at(x[-1]), self.ms.mesh, *self.ms.kw)
-        mesh = remesh(ms, Y, T, norms)
+        mesh = remesh(ms, Y, T, norms, max_segments=self.max_segments)
         if mesh.size == self.ms.mesh.size and np.allclose(mesh, self.ms.mesh, rtol=0, atol=1e-12):
             self.limit = 10.0 * float(np.max(norms))  # no better mesh: check again later
             return False
@@ -245,7 +258,10 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         for t2, r2, a2, d2 in settings[stage + 1 :]:
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
             refine.append((ev, t2, d2))
-        trigger = _RemeshTrigger(ms, system_at, limit) if remesh_ else None
+        trigger = (
+            _RemeshTrigger(ms, system_at, limit, kw.get("max_segments", MAX_SEGMENTS))
+            if remesh_ else None
+        )  # fmt: skip
         # a crawl: the last steps together below the first stage's ds_min or its tol (steps
         # smaller than the corrector's tolerance do not move the branch; a walk handed on by
         # shooting="auto" has ds_min = 1e-16 and tol 1e-12, and crawled for 60+ points)

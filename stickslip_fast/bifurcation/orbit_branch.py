@@ -8,11 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..base.messages import plain
-from ..model.system import SWEEPABLE
 from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
-from .multishoot import DEFAULT_SEGMENTS, MESH_LIMIT
+from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS, MESH_LIMIT
 from .multishoot_branch import append_branch, continue_multiple, ms_start
 from .orbits import (
     EQUILIBRIUM_SPEED,
@@ -23,6 +21,7 @@ from .orbits import (
     return_map,
     stick_phases,
 )
+from .walk_args import _check_args
 
 #: Tighter settings :func:`continue_orbit` goes on with, in turn, where the corrector fails
 #: at ``ds_min`` (``sharp_ends=True``): (tol, rtol, atol, ds_min). The sharp ends of
@@ -45,47 +44,6 @@ MS_TOL_FLOOR = 1e-12
 
 
 # ------------------------------------------------------------------ orbits
-def _difference(value_at, lam: float, h: float, centre):
-    """d value / d lambda: central, or one-sided at the edge of the parameter's valid
-    range (value_at raises ValueError outside it, or returns None on failure)."""
-
-    def at(v):
-        try:
-            return value_at(v)
-        except ValueError:
-            return None
-
-    plus, minus = at(lam + h), at(lam - h)
-    if plus is not None and minus is not None:
-        return (plus - minus) / (2 * h)
-    if plus is not None and centre is not None:
-        return (plus - centre) / h
-    if minus is not None and centre is not None:
-        return (centre - minus) / h
-    return None
-
-
-def _check_args(system, what, param, bounds, ds, ds_min, ds_max, tol, max_points):
-    """The continuation arguments, checked; returns (start value, lo, hi)."""
-    if param not in SWEEPABLE or param == "n_oscillators":
-        raise ValueError(f"param must be one of {sorted(SWEEPABLE)}, got {param!r}")
-    try:
-        lo, hi = (float(v) for v in bounds)
-    except (TypeError, ValueError):
-        raise ValueError(f"bounds must be two numbers (lo, hi), got {plain(bounds)}") from None
-    lam0 = float(getattr(system, param))
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= lam0 <= hi):
-        raise ValueError(f"bounds {plain(bounds)} must contain the {what}'s {param} = {lam0}")
-    for name, v in (("ds", ds), ("ds_min", ds_min), ("ds_max", ds_max), ("tol", tol)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {plain(v)}")
-    if not ds_min <= ds <= ds_max:
-        raise ValueError(f"need ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
-    if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
-        raise ValueError(f"max_points must be an integer >= 2, got {max_points!r}")
-    return lam0, lo, hi
-
-
 def _orbit_evaluator(
     system0,
     param: str,
@@ -207,7 +165,7 @@ segments : int
 remesh : bool
     Multiple shooting only: cut the segments again along the branch wherever
     one amplifies by more than ``multishoot.REMESH_LIMIT`` (merge neighbours that
-    amplify little, bisect those above ``MESH_LIMIT``, up to 64 segments;
+    amplify little, bisect those above ``MESH_LIMIT``, up to ``max_segments``;
     :func:`~stickslip_fast.bifurcation.multishoot.remesh`), re-sampling the
     current orbit on the new mesh. Without it the mesh is fixed at the start,
     and the branch ends where its segment through the sharpest passage reaches
@@ -216,6 +174,12 @@ remesh : bool
     ``shooting="auto"`` gives multiple shooting a corrector tolerance of at
     least :data:`MS_TOL_FLOOR` (its residual carries the segments'
     integration error).
+max_segments : int
+    Multiple shooting only: the most segments a mesh gets, at the start
+    (where a segment amplifies by more than ``MESH_LIMIT``) and in each
+    re-mesh; an integer >= ``segments``. The far ends of re-meshed branches
+    stop where the cap is reached (μ ~ 1e36-1e48 at the default 64; 256
+    reached μ = 6.2e178 at about 4x the cost per point; docs/orbits.md).
 
 Returns
 -------
@@ -252,23 +216,23 @@ def continue_orbit(
     shooting: str = "single",
     segments: int = DEFAULT_SEGMENTS,
     remesh: bool = False,
+    max_segments: int = MAX_SEGMENTS,
 ) -> Branch:
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
     lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
                                max_points)  # fmt: skip
-    check_shooting(shooting, segments)
+    check_shooting(shooting, segments, max_segments)
     if remesh and shooting == "single":
         raise ValueError("remesh needs shooting='multiple' or 'auto', got shooting='single'")
     kw = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol, rtol=rtol,
               atol=atol, fd_step=fd_step, stick_events=stick_events, sharp_ends=sharp_ends)  # fmt: skip
+    mesh_args = (int(segments), bool(remesh), int(max_segments))
     if shooting == "multiple":
-        return _continue_multiple_from(orbit, param, (lo, hi), direction, int(segments), kw,
-                                       bool(remesh))  # fmt: skip
+        return _continue_multiple_from(orbit, param, (lo, hi), direction, mesh_args, kw)
     branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
     if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
-        branch = _go_on_multiple(branch, orbit, (lo, hi), int(segments), kw, bool(remesh),
-                                 way_on)  # fmt: skip
+        branch = _go_on_multiple(branch, orbit, (lo, hi), mesh_args, kw, way_on)
     return branch
 
 
@@ -280,21 +244,23 @@ def _continue_multiple_from(
     param: str,
     bounds: tuple[float, float],
     direction: float,
-    segments: int,
+    mesh_args: tuple[int, bool, int],
     kw,
-    remesh: bool = False,
 ) -> Branch:
     """continue_orbit with shooting="multiple": the orbit corrected by multiple shooting
     (``segments`` even cuts, or the orbit's own segments if it was found by multiple
-    shooting; refined by :data:`MESH_LIMIT`), then continued."""
+    shooting; refined by :data:`MESH_LIMIT`), then continued. ``mesh_args``:
+    (segments, remesh, max_segments) of :func:`continue_orbit`."""
+    segments, remesh, max_segments = mesh_args
     rtol, atol, fd_step, tol = kw["rtol"], kw["atol"], kw["fd_step"], kw["tol"]
     x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, segments, rtol, atol,
-                        fd_step, tol, MESH_LIMIT, known=orbit.segments)  # fmt: skip
+                        fd_step, tol, MESH_LIMIT, known=orbit.segments,
+                        max_segments=max_segments)  # fmt: skip
     if x0 is None:
         raise ValueError("orbit could not be corrected by multiple shooting")
     return continue_multiple(orbit.system, param, orbit.period, x0, direction, bounds,
                              segments=mesh, stages=SHARP_END_STAGES, remesh=remesh,
-                             **kw)  # fmt: skip
+                             max_segments=max_segments, **kw)  # fmt: skip
 
 
 def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
@@ -325,10 +291,12 @@ def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
 
 
 def _go_on_multiple(
-    branch: Branch, orbit: Orbit, bounds, segments: int, kw, remesh: bool = False, way_on=None
+    branch: Branch, orbit: Orbit, bounds, mesh_args: tuple[int, bool, int], kw, way_on=None
 ) -> Branch:
     """``branch`` continued by multiple shooting from its last point (shooting="auto"),
-    along ``way_on`` (the single-shooting walk's last tangent) or against it."""
+    along ``way_on`` (the single-shooting walk's last tangent) or against it.
+    ``mesh_args``: (segments, remesh, max_segments) of :func:`continue_orbit`."""
+    segments, remesh, max_segments = mesh_args
     if branch.values.size < 2 or kw["max_points"] - branch.values.size < 2:
         return branch
     # the tightest tolerances the single-shooting branch used (the last sharp-end stage)
@@ -342,7 +310,7 @@ def _go_on_multiple(
     lam = float(branch.values[-1])
     system = dataclasses.replace(orbit.system, **{param: lam})
     x0, mesh = ms_start(system, branch.points[-1], float(branch.T[-1]), param, segments, rtol,
-                        atol, kw["fd_step"], tol, MESH_LIMIT)  # fmt: skip
+                        atol, kw["fd_step"], tol, MESH_LIMIT, max_segments=max_segments)  # fmt: skip
     if x0 is None:
         return branch
     direction = float(np.sign(branch.values[-1] - branch.values[-2]) or 1.0)
@@ -361,7 +329,7 @@ def _go_on_multiple(
         way_on, direction = (-way_on[0], -way_on[1]), -direction
     second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
                                segments=mesh, stages=(), remesh=remesh, chord=way_on,
-                               **kw2)  # fmt: skip
+                               max_segments=max_segments, **kw2)  # fmt: skip
     second.system = orbit.system
     return append_branch(branch, second, f"single shooting: {branch.status}")
 

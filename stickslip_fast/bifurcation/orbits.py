@@ -89,6 +89,9 @@ __all__ = [
 #: The ``shooting`` choices of :func:`find_orbit` and :func:`continue_orbit`.
 SHOOTING_MODES = ("single", "multiple", "auto")
 
+#: :func:`find_orbit`'s default ``t_max`` (the longest search for the section).
+DEFAULT_T_MAX = 1e4
+
 
 # ------------------------------------------------------------------ orbits
 def _start_from(system: System, start: Any, period: int | None, t_max: float):
@@ -222,7 +225,7 @@ def find_orbit(
     max_iter: int = 30,
     rtol: float = _DEFAULT_RTOL,
     atol: float = _DEFAULT_ATOL,
-    t_max: float = 1e4,
+    t_max: float = DEFAULT_T_MAX,
     tangent_atol: float = _TANGENT_ATOL,
     shooting: str = "single",
     segments: int = DEFAULT_SEGMENTS,
@@ -246,20 +249,29 @@ def find_orbit(
 find_orbit.__doc__ = _FIND_ORBIT_DOC
 
 
-def check_shooting(shooting: str, segments: int) -> None:
-    """Check the ``shooting`` and ``segments`` arguments of :func:`find_orbit` and
-    :func:`~stickslip_fast.bifurcation.orbit_branch.continue_orbit`.
+def check_shooting(shooting: str, segments: int, max_segments: int | None = None) -> None:
+    """Check the ``shooting``, ``segments`` (and ``max_segments``) arguments of
+    :func:`find_orbit` and :func:`~stickslip_fast.bifurcation.orbit_branch.continue_orbit`.
 
     Raises
     ------
     ValueError
-        For a mode not in :data:`SHOOTING_MODES` or a segment count that is not an
-        integer >= 1, naming the argument.
+        For a mode not in :data:`SHOOTING_MODES`, a segment count that is not an
+        integer >= 1, or a ``max_segments`` that is not an integer >= ``segments``,
+        naming the argument.
     """
     if shooting not in SHOOTING_MODES:
         raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
-    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
+    if not _is_count(segments, 1):
         raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
+    if max_segments is not None and not _is_count(max_segments, segments):
+        raise ValueError(
+            f"max_segments must be an integer >= segments ({segments}), got {max_segments!r}"
+        )
+
+
+def _is_count(v: Any, least: int) -> bool:
+    return not isinstance(v, bool) and isinstance(v, (int, np.integer)) and v >= least
 
 
 def _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter) -> None:

@@ -52,7 +52,7 @@ Layout (every section optional except what the command needs)::
     # period = 1          # default: the period the simulation finds
     direction = "both"    # 1: towards larger values; -1: smaller; "both": one branch through the start
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
-    # shooting = "single"|"multiple"|"auto", segments   (multiple shooting)
+    # shooting = "single"|"multiple"|"auto", segments, remesh, max_segments   (multiple shooting)
     # param2, bounds2, direction2, kinds2   (the codim-1 points' curves in a 2nd parameter)
     # switch = true       # also follow the doubled orbit from each period-doubling found
     # sharp_ends = false  # do not retry with tighter settings where the corrector fails
@@ -72,6 +72,7 @@ from typing import Any
 import numpy as np
 
 from ..base.messages import plain
+from ..bifurcation.multishoot import DEFAULT_SEGMENTS
 from ..core.settings import Settings
 from ..model.system import SWEEPABLE, System
 from .config_values import ConfigError, _values_from_spec  # noqa: F401  (re-exported)
@@ -107,7 +108,7 @@ _SECTIONS = {
     "continue": {
         "param", "bounds", "start", "period", "direction", "ds", "ds_min", "ds_max",
         "max_points", "tol", "switch", "sharp_ends", "stick_events", "shooting", "segments",
-        "param2", "bounds2", "direction2", "kinds2",
+        "remesh", "max_segments", "param2", "bounds2", "direction2", "kinds2",
     },
 }  # fmt: skip
 
@@ -423,20 +424,28 @@ def _parse_continue(table: dict[str, Any]) -> dict[str, Any]:
 
 
 def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
-    """[continue].shooting / segments (multiple shooting) and param2 / bounds2 / direction2
-    (the two-parameter curves of the branch's folds and period-doublings, or of an
-    equilibrium branch's folds and Hopf points), into ``out``."""
+    """[continue].shooting / segments / remesh / max_segments (multiple shooting) and
+    param2 / bounds2 / direction2 (the two-parameter curves of the branch's folds and
+    period-doublings, or of an equilibrium branch's folds and Hopf points), into ``out``."""
     orbit = out.get("start", "orbit") == "orbit"
     if "shooting" in table:
         if table["shooting"] not in ("single", "multiple", "auto") or not orbit:
             raise ConfigError('[continue].shooting must be "single", "multiple" or "auto" '
                               f"(start = 'orbit' only), got {table['shooting']!r}")  # fmt: skip
         out["shooting"] = table["shooting"]
-    if "segments" in table:
-        v = table["segments"]
-        if isinstance(v, bool) or not isinstance(v, int) or v < 1 or not orbit:
-            raise ConfigError(f"[continue].segments must be an integer >= 1, got {plain(v)}")
-        out["segments"] = v
+    for key in ("segments", "max_segments"):  # max_segments: at least segments
+        least = out.get("segments", DEFAULT_SEGMENTS) if key == "max_segments" else 1
+        if key in table:
+            v = table[key]
+            if isinstance(v, bool) or not isinstance(v, int) or v < least or not orbit:
+                raise ConfigError(f"[continue].{key} must be an integer >= {least} (start = "
+                                  f"'orbit' only), got {plain(v)}")  # fmt: skip
+            out[key] = v
+    if "remesh" in table:
+        out["remesh"] = v = table["remesh"]
+        if not isinstance(v, bool) or (v and out.get("shooting", "single") == "single"):
+            raise ConfigError(f"[continue].remesh must be true or false (true needs shooting = "
+                              f"'multiple' or 'auto'), got {plain(v)}")  # fmt: skip
     if "param2" not in table:
         if "bounds2" in table or "direction2" in table or "kinds2" in table:
             raise ConfigError("[continue].bounds2, direction2 and kinds2 need param2")
