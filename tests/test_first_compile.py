@@ -16,6 +16,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import stickslip_fast
 
 ROOT = Path(stickslip_fast.__file__).resolve().parents[1]
@@ -95,3 +97,33 @@ def test_first_simulate_compiles_one_method_family(tmp_path):
     assert not any(name.startswith(("_small_", "jacobian_blocks")) for _, name, _ in compiled)
     # the method index must belong to the variant's family, else an error, never a run
     assert rec["mismatch"] == ST_ERROR
+
+
+def test_the_compile_command_fills_the_cache_that_a_first_simulate_loads(tmp_path):
+    # `stickslip-fast compile` in a fresh cache, then the first run above in a new process
+    # on that cache: it compiles nothing (Numba's compile events fire only on a cache miss)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT))
+    cmd = [sys.executable, "-m", "stickslip_fast.cli", "compile", "--kernels", "simulate",
+           "--methods", "dopri5", "--drives", "constant", "--jobs", "1"]  # fmt: skip
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900, check=True,
+                         cwd=tmp_path).stdout  # fmt: skip
+    assert "simulate  dopri5" in out and f"cache: {tmp_path / 'cache'}" in out, out
+    rec = _first_run(tmp_path)
+    assert rec["compiled"] == [], rec["compiled"][:5]
+    assert rec["integrate"] == 1 and rec["drive"] == 0  # integrate loaded; drive linked in it
+
+
+def test_compile_jobs_and_bad_arguments():
+    from stickslip_fast.cli.precompile import compile_jobs, precompile
+
+    jobs = compile_jobs(("simulate", "orbits"), ("rodas5p", "auto"), (1, 2), ("dc-motor",))
+    assert jobs == [
+        ("simulate", "rodas5p", 1, "dc-motor"), ("simulate", "auto", 1, "dc-motor"),
+        ("simulate", "rodas5p", 2, "dc-motor"), ("simulate", "auto", 2, "dc-motor"),
+        ("orbits", "rodas5p", 1, "dc-motor"), ("orbits", "rodas5p", 2, "dc-motor"),
+    ]  # fmt: skip
+    for kw, name in ((dict(kernels=("sim",)), "kernel"), (dict(methods=("rk4",)), "method"),
+                     (dict(drives=("belt",)), "drive"), (dict(oscillators=(0,)), "oscillators"),
+                     (dict(jobs=0), "jobs")):  # fmt: skip
+        with pytest.raises(ValueError, match=name):
+            precompile(**kw)

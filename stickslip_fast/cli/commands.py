@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..base.version import package_version
+from . import precompile
 from .arguments import (  # noqa: F401
     _add_common,
     _check_writable,
@@ -255,6 +256,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="BRANCH.h5", help="HDF5 branch file")
     p.add_argument("--quiet", action="store_true", help="no progress and no report")
     p.set_defaults(func=_cmd_continue)
+
+    precompile.add_parser(sub)
 
     p = sub.add_parser("info", help="summarise a result file")
     p.add_argument("file", metavar="OUT.h5")

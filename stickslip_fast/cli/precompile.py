@@ -1,0 +1,166 @@
+"""``stickslip-fast compile``: compile the kernels ahead of the first run, into Numba's cache.
+
+A fresh install compiles each kernel the first time a process uses it (15-35 s for a
+first ``simulate`` on two cores; docs/performance.md, "The first run"); Numba then
+caches it on disk, and later processes load it in about a second. This command pays
+the compile once, ahead, where that suits: while a container image is built, in a CI
+step whose cache is kept, on a new cluster node. It runs each requested kernel on a
+tiny problem through the public functions, so with the argument types of real runs,
+and it runs the kernels in parallel processes (Numba compiles one function at a time
+in a process).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import multiprocessing
+import os
+import time
+import warnings
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+
+#: What can be compiled: one trajectory (``simulate``), the sweep kernels (``sweep``:
+#: restart and continuation chunks, which ``census`` and ``basins`` run too), and the
+#: variational kernels of periodic orbits (``orbits``: ``find_orbit``, ``continue_orbit``).
+KERNELS = ("simulate", "sweep", "orbits")
+
+#: The defaults: what the README's first examples and most configs in data/ use.
+DEFAULT_METHODS = ("rodas5p",)
+DEFAULT_OSCILLATORS = (1,)
+DEFAULT_DRIVES = ("constant", "dc-motor")
+
+
+def compile_jobs(
+    kernels: Sequence[str], methods: Sequence[str], oscillators: Sequence[int],
+    drives: Sequence[str],
+) -> list[tuple[str, str, int, str]]:  # fmt: skip
+    """The (kernel, method, N, drive) jobs; ``orbits`` once per (N, drive), since the
+    variational problem is always integrated by Rodas5P."""
+    jobs = []
+    for kernel, n, drive in itertools.product(kernels, oscillators, drives):
+        for method in ("rodas5p",) if kernel == "orbits" else methods:
+            jobs.append((kernel, method, n, drive))
+    return jobs
+
+
+def run_job(job: tuple[str, str, int, str]) -> dict:
+    """Compile (or load) one job's kernels by running them on a tiny problem."""
+    import numpy as np
+
+    import stickslip_fast as ssf
+    from stickslip_fast.bifurcation.returnmap import _field, return_map
+
+    kernel, method, n, drive = job
+    # the tiny problems' labels (no orbit, disks in step) are not what the user runs
+    warnings.simplefilter("ignore")
+    t0 = time.perf_counter()
+    system = ssf.System.preset("asymmetric", drive=drive, n_oscillators=n)
+    kw = dict(method=method, h=1e-3 if method == "dopri5-fixed" else None)
+    if kernel == "simulate":  # long enough for a few minima: the period detection too
+        ssf.simulate(system, 60.0, **kw)
+    elif kernel == "sweep":
+        for mode in ("restart", "continuation"):
+            ssf.sweep(system, "eta", np.array([5.0, 6.0]), t_end=1.0, mode=mode,
+                      progress=False, **kw)  # fmt: skip
+    else:  # the tangent kernel, and the one with the parameter's sensitivity
+        z = system.initial_state(None) + 1e-3
+        _field(system, z)  # the vector field from Python (find_orbit's start and checks)
+        return_map(system, z, 1, t_max=1.0)
+        return_map(system, z, 1, t_max=1.0, param="eta")
+    return dict(job=job, seconds=time.perf_counter() - t0, pid=os.getpid())
+
+
+def cache_location() -> str:
+    """Where Numba keeps the cache: ``NUMBA_CACHE_DIR``, else next to the package's modules."""
+    import numba
+
+    import stickslip_fast
+
+    if numba.config.CACHE_DIR:
+        return str(numba.config.CACHE_DIR)
+    return os.path.join(os.path.dirname(stickslip_fast.__file__), "**", "__pycache__")
+
+
+def precompile(
+    kernels: Sequence[str] = KERNELS,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    oscillators: Sequence[int] = DEFAULT_OSCILLATORS,
+    drives: Sequence[str] = DEFAULT_DRIVES,
+    jobs: int | None = None,
+    say=print,
+) -> list[dict]:
+    """Compile the kernels of every (kernel, method, N, drive) into Numba's cache.
+
+    Parameters
+    ----------
+    kernels : sequence of {"simulate", "sweep", "orbits"}
+    methods : sequence of str
+        Integration methods (``stickslip_fast.METHODS``).
+    oscillators : sequence of int
+        Numbers of disks N >= 1 (N <= 4 have kernels of their own; larger N share one).
+    drives : sequence of {"constant", "dc-motor"}
+    jobs : int, optional
+        Processes compiling side by side (default: the number of cores).
+    say : callable
+        Receives one line per finished job.
+
+    Returns
+    -------
+    list of dict
+        Per job: ``job`` (kernel, method, N, drive), ``seconds``, ``pid``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown kernel, method or drive, or N < 1, naming it.
+    """
+    from stickslip_fast import METHODS
+
+    for name, given, allowed in (("kernel", kernels, KERNELS), ("method", methods, METHODS),
+                                 ("drive", drives, DEFAULT_DRIVES)):  # fmt: skip
+        bad = [g for g in given if g not in allowed]
+        if bad or not given:
+            raise ValueError(f"{name} must be one or more of {list(allowed)}, got {bad or given}")
+    if not oscillators or any(isinstance(n, bool) or not isinstance(n, int) or n < 1
+                              for n in oscillators):  # fmt: skip
+        raise ValueError(f"oscillators must be integers >= 1, got {list(oscillators)}")
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
+    todo = compile_jobs(kernels, methods, oscillators, drives)
+    workers = max(1, min(jobs or os.cpu_count() or 1, len(todo)))
+    out = []
+    # spawn: each worker imports the package afresh (no forked Numba state)
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        for rec in pool.map(run_job, todo):
+            kernel, method, n, drive = rec["job"]
+            say(f"{kernel:<9} {method:<12} N = {n:<3} {drive:<9} {rec['seconds']:6.1f} s")
+            out.append(rec)
+    return out
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """The ``compile`` subcommand."""
+    p = sub.add_parser(
+        "compile", help="compile the kernels ahead of the first run (into Numba's cache)"
+    )
+    p.add_argument("--kernels", nargs="+", default=list(KERNELS), metavar="KERNEL",
+                   help=f"of {', '.join(KERNELS)} (default: all)")  # fmt: skip
+    p.add_argument("--methods", nargs="+", default=list(DEFAULT_METHODS), metavar="METHOD",
+                   help="integration methods (default: rodas5p)")  # fmt: skip
+    p.add_argument("--oscillators", nargs="+", type=int, default=list(DEFAULT_OSCILLATORS),
+                   metavar="N", help="numbers of disks (default: 1)")  # fmt: skip
+    p.add_argument("--drives", nargs="+", default=list(DEFAULT_DRIVES), metavar="DRIVE",
+                   help="constant and/or dc-motor (default: both)")  # fmt: skip
+    p.add_argument("--jobs", type=int, help="processes side by side (default: all cores)")
+    p.set_defaults(func=_cmd_compile)
+
+
+def _cmd_compile(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    done = precompile(args.kernels, args.methods, args.oscillators, args.drives, args.jobs)
+    print(f"compiled {len(done)} jobs in {time.perf_counter() - t0:.1f} s; "
+          f"cache: {cache_location()}")  # fmt: skip
+    return 0
