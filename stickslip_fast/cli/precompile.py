@@ -49,21 +49,23 @@ def run_job(job: tuple[str, str, int, str]) -> dict:
     """Compile (or load) one job's kernels by running them on a tiny problem."""
     import numpy as np
 
-    import stickslip_fast as ssf
-    from stickslip_fast.bifurcation.returnmap import _field, return_map
+    from ..analysis.simulate import simulate
+    from ..analysis.sweep import sweep
+    from ..bifurcation.returnmap import _field, return_map
+    from ..model.system import System
 
     kernel, method, n, drive = job
     # the tiny problems' labels (no orbit, disks in step) are not what the user runs
     warnings.simplefilter("ignore")
     t0 = time.perf_counter()
-    system = ssf.System.preset("asymmetric", drive=drive, n_oscillators=n)
+    system = System.preset("asymmetric", drive=drive, n_oscillators=n)
     kw = dict(method=method, h=1e-3 if method == "dopri5-fixed" else None)
     if kernel == "simulate":  # long enough for a few minima: the period detection too
-        ssf.simulate(system, 60.0, **kw)
+        simulate(system, 60.0, **kw)
     elif kernel == "sweep":
         for mode in ("restart", "continuation"):
-            ssf.sweep(system, "eta", np.array([5.0, 6.0]), t_end=1.0, mode=mode,
-                      progress=False, **kw)  # fmt: skip
+            sweep(system, "eta", np.array([5.0, 6.0]), t_end=1.0, mode=mode,
+                  progress=False, **kw)  # fmt: skip
     else:  # the tangent kernel, and the one with the parameter's sensitivity
         z = system.initial_state(None) + 1e-3
         _field(system, z)  # the vector field from Python (find_orbit's start and checks)
@@ -73,14 +75,17 @@ def run_job(job: tuple[str, str, int, str]) -> dict:
 
 
 def cache_location() -> str:
-    """Where Numba keeps the cache: ``NUMBA_CACHE_DIR``, else next to the package's modules."""
+    """Where Numba keeps the cache: ``NUMBA_CACHE_DIR``; else the ``__pycache__`` folders
+    next to the package's modules where they are writable; else Numba's user-wide folder."""
     import numba
-
-    import stickslip_fast
+    from numba.misc.appdirs import AppDirs
 
     if numba.config.CACHE_DIR:
         return str(numba.config.CACHE_DIR)
-    return os.path.join(os.path.dirname(stickslip_fast.__file__), "**", "__pycache__")
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    if os.access(package, os.W_OK):
+        return os.path.join(package, "*", "__pycache__")
+    return AppDirs(appname="numba", appauthor=False).user_cache_dir
 
 
 def precompile(
@@ -99,7 +104,8 @@ def precompile(
     methods : sequence of str
         Integration methods (``stickslip_fast.METHODS``).
     oscillators : sequence of int
-        Numbers of disks N >= 1 (N <= 4 have kernels of their own; larger N share one).
+        Numbers of disks N >= 1 (one disk has kernels of its own for each drive; any
+        N >= 2 runs the generic ones, so one N >= 2 stands for all).
     drives : sequence of {"constant", "dc-motor"}
     jobs : int, optional
         Processes compiling side by side (default: the number of cores).
@@ -116,7 +122,7 @@ def precompile(
     ValueError
         For an unknown kernel, method or drive, or N < 1, naming it.
     """
-    from stickslip_fast import METHODS
+    from ..core.trajectory import METHODS
 
     for name, given, allowed in (("kernel", kernels, KERNELS), ("method", methods, METHODS),
                                  ("drive", drives, DEFAULT_DRIVES)):  # fmt: skip
