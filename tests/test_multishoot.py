@@ -210,7 +210,7 @@ def test_max_segments_caps_the_mesh_not_the_orbit(monkeypatch):
     assert [seg[0].size - 1 for seg in capped.segments] == [20] * 3
     np.testing.assert_allclose(capped.points[0], full.points[0], rtol=0, atol=1e-9)
     assert abs(capped.multipliers[0][0] / full.multipliers[0][0] - 1) < 1e-6
-    with pytest.raises(ValueError, match="max_segments must be an integer >= segments"):
+    with pytest.raises(ValueError, match="max_segments must be an integer >= 8"):
         ssf.continue_orbit(orbit, "eta", (3.3, 3.33), max_segments=4, **kw)  # segments: 8
     with pytest.raises(ValueError, match="max_segments"):
         ssf.continue_orbit(orbit, "eta", (3.3, 3.33), max_segments=True, **kw)

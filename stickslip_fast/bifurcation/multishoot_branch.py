@@ -237,7 +237,8 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
     """The branch by :func:`pseudo_arclength`, one piece per mesh: (pieces, status).
 
     ``settings``: the stages (tol, rtol, atol, ds_min), the first in force at x0. With
-    ``remesh_``, a piece stops where :class:`_RemeshTrigger` finds a better mesh; the next
+    ``remesh_``, a piece stops where :class:`_RemeshTrigger` finds a better mesh (of at most
+    ``kw["max_segments"]`` segments); the next
     starts from its last point re-sampled on that mesh, in the stage and with the step
     size reached, its tangent oriented along the last chord. Where that point cannot be
     corrected on the new mesh, the walk goes on on the old one (re-meshing again once a
@@ -258,10 +259,7 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         for t2, r2, a2, d2 in settings[stage + 1 :]:
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
             refine.append((ev, t2, d2))
-        trigger = (
-            _RemeshTrigger(ms, system_at, limit, kw.get("max_segments", MAX_SEGMENTS))
-            if remesh_ else None
-        )  # fmt: skip
+        trigger = _RemeshTrigger(ms, system_at, limit, kw["max_segments"]) if remesh_ else None
         # a crawl: the last steps together below the first stage's ds_min or its tol (steps
         # smaller than the corrector's tolerance do not move the branch; a walk handed on by
         # shooting="auto" has ds_min = 1e-16 and tol 1e-12, and crawled for 60+ points)

@@ -48,6 +48,7 @@ import numpy as np
 
 from ..analysis.simulate import SimulationResult, simulate
 from ..base.messages import plain
+from ..core.settings import check_integer
 from ..model.system import System
 from .equilibria import (  # noqa: F401
     EQUILIBRIUM_SPEED,
@@ -257,21 +258,15 @@ def check_shooting(shooting: str, segments: int, max_segments: int | None = None
     ------
     ValueError
         For a mode not in :data:`SHOOTING_MODES`, a segment count that is not an
-        integer >= 1, or a ``max_segments`` that is not an integer >= ``segments``,
-        naming the argument.
+        integer >= 1, or a ``max_segments`` that is not an integer >= ``segments``
+        (:func:`~stickslip_fast.core.settings.check_integer`), naming the argument.
     """
     if shooting not in SHOOTING_MODES:
         raise ValueError(f"shooting must be one of {SHOOTING_MODES}, got {shooting!r}")
-    if not _is_count(segments, 1):
+    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
         raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
-    if max_segments is not None and not _is_count(max_segments, segments):
-        raise ValueError(
-            f"max_segments must be an integer >= segments ({segments}), got {max_segments!r}"
-        )
-
-
-def _is_count(v: Any, least: int) -> bool:
-    return not isinstance(v, bool) and isinstance(v, (int, np.integer)) and v >= least
+    if max_segments is not None:
+        check_integer("max_segments", max_segments, int(segments))
 
 
 def _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter) -> None:

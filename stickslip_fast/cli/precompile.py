@@ -21,6 +21,8 @@ import warnings
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 
+from ..model.system import DRIVES
+
 #: What can be compiled: one trajectory (``simulate``), the sweep kernels (``sweep``:
 #: restart and continuation chunks, which ``census`` and ``basins`` run too), and the
 #: variational kernels of periodic orbits (``orbits``: ``find_orbit``, ``continue_orbit``).
@@ -29,7 +31,7 @@ KERNELS = ("simulate", "sweep", "orbits")
 #: The defaults: what the README's first examples and most configs in data/ use.
 DEFAULT_METHODS = ("rodas5p",)
 DEFAULT_OSCILLATORS = (1,)
-DEFAULT_DRIVES = ("constant", "dc-motor")
+DEFAULT_DRIVES = DRIVES
 
 
 def compile_jobs(
@@ -120,20 +122,22 @@ def precompile(
     Raises
     ------
     ValueError
-        For an unknown kernel, method or drive, or N < 1, naming it.
+        For an unknown kernel, method or drive, or an N or ``jobs`` that is not an
+        integer >= 1, naming it.
     """
+    from ..core.settings import check_integer
     from ..core.trajectory import METHODS
 
     for name, given, allowed in (("kernel", kernels, KERNELS), ("method", methods, METHODS),
-                                 ("drive", drives, DEFAULT_DRIVES)):  # fmt: skip
+                                 ("drive", drives, DRIVES)):  # fmt: skip
         bad = [g for g in given if g not in allowed]
         if bad or not given:
             raise ValueError(f"{name} must be one or more of {list(allowed)}, got {bad or given}")
-    if not oscillators or any(isinstance(n, bool) or not isinstance(n, int) or n < 1
-                              for n in oscillators):  # fmt: skip
-        raise ValueError(f"oscillators must be integers >= 1, got {list(oscillators)}")
-    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
-        raise ValueError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if not oscillators:
+        raise ValueError("oscillators must be one or more integers >= 1, got none")
+    oscillators = [check_integer("oscillators", n, 1) for n in oscillators]
+    if jobs is not None:
+        jobs = check_integer("jobs", jobs, 1)
     todo = compile_jobs(kernels, methods, oscillators, drives)
     workers = max(1, min(jobs or os.cpu_count() or 1, len(todo)))
     out = []
