@@ -194,6 +194,21 @@ def test_a_remeshed_branch_keeps_to_the_orbits_of_the_fixed_mesh(monkeypatch):
         ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True)
 
 
+def test_find_orbit_max_segments_caps_the_bisection():
+    # the orbit at mu = 1.1e8: 8 even cuts bisected to 14 segments by default, to exactly
+    # 10 with max_segments=10; the same orbit (the multiplier from fewer, more amplifying
+    # segments: 7e-5 relative, measured)
+    s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
+    full = unstable_orbit()
+    capped = ssf.find_orbit(s, START_UNSTABLE, 1, shooting="multiple", tol=1e-11, rtol=1e-13,
+                            atol=1e-15, max_segments=10)  # fmt: skip
+    assert full.segments[0].size - 1 == 14 and capped.segments[0].size - 1 == 10
+    assert capped.converged and np.max(np.abs(capped.points[0] - full.points[0])) < 1e-12
+    assert abs(capped.multipliers[0] / full.multipliers[0] - 1) < 1e-3
+    with pytest.raises(ValueError, match="max_segments must be an integer >= 8"):
+        ssf.find_orbit(s, START_UNSTABLE, 1, shooting="multiple", max_segments=4)
+
+
 def test_max_segments_caps_the_mesh_not_the_orbit(monkeypatch):
     # The orbit past the upper fold (mu = 1.1e8), found on 14 segments: the continuation
     # refines its mesh where a segment amplifies by more than MESH_LIMIT, to 29 segments by

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..model.system import System
 from .equilibria import EQUILIBRIUM_SPEED
-from .multishoot import MESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh
+from .multishoot import MAX_SEGMENTS, MESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh
 from .orbit_record import Orbit
 from .returnmap import SECTION_INDEX, _field, _minimal_period, return_map
 
@@ -127,6 +127,7 @@ def find_orbit_multiple(
     tangent_atol: float,
     T: float | None = None,
     known: tuple[np.ndarray, np.ndarray] | None = None,
+    max_segments: int = MAX_SEGMENTS,
 ):
     """:func:`~stickslip_fast.bifurcation.orbits.find_orbit` with ``shooting="multiple"`` (its arguments).
 
@@ -134,6 +135,7 @@ def find_orbit_multiple(
     ``(mesh, starts)`` of the orbit already cut into segments (``Orbit.segments``,
     ``Branch.segments``), used as they are, with ``T``, instead of ``segments`` even cuts
     of one trajectory from z (which a very unstable orbit leaves within its period).
+    ``max_segments``: the most segments the even cuts are refined into.
     """
     if known is not None:
         mesh, starts = (np.array(a, dtype=float) for a in known)
@@ -148,7 +150,7 @@ def find_orbit_multiple(
     st, Y = initial_segments(ms, z, T) if math.isfinite(T) else ("no-crossings", None)
     if st == "ok":
         # bisect the segments that amplify most (past a sharp fold: the capture into stick)
-        mesh = refine_mesh(ms, Y, T, MESH_LIMIT)
+        mesh = refine_mesh(ms, Y, T, MESH_LIMIT, max_segments)
         st, Y = ms.states_at(Y, T, mesh[:-1] * T, mesh=ms.mesh)
         ms = MultiShooting(system, mesh, rtol, atol, tangent_atol)
     if st != "ok":

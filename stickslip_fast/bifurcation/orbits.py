@@ -57,7 +57,7 @@ from .equilibria import (  # noqa: F401
     _sliding_guess,
     find_equilibrium,
 )
-from .multishoot import DEFAULT_SEGMENTS
+from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS
 from .multishoot_orbit import find_orbit_multiple
 from .orbit_record import ORBIT_STATUSES, Orbit
 from .returnmap import (  # noqa: F401
@@ -184,8 +184,11 @@ shooting : {"single", "multiple", "auto"}
     limit, docs/limits.md).
 segments : int
     m >= 1, the segments of multiple shooting (even cuts in time); those that
-    amplify by more than ``multishoot.MESH_LIMIT`` are then bisected (up to 64
-    segments in all).
+    amplify by more than ``multishoot.MESH_LIMIT`` are then bisected, up to
+    ``max_segments``.
+max_segments : int
+    The most segments multiple shooting bisects into (an integer >=
+    ``segments``; default ``multishoot.MAX_SEGMENTS``, 64).
 
 Returns
 -------
@@ -230,18 +233,20 @@ def find_orbit(
     tangent_atol: float = _TANGENT_ATOL,
     shooting: str = "single",
     segments: int = DEFAULT_SEGMENTS,
+    max_segments: int = MAX_SEGMENTS,
 ) -> Orbit:
     _check_find_args(system, period, tol, rtol, atol, t_max, tangent_atol, max_iter)
-    check_shooting(shooting, segments)
+    check_shooting(shooting, segments, max_segments)
     period = None if period is None else int(period)
     z, period = _start_from(system, start, period, t_max)
     kw = dict(tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, t_max=t_max,
               tangent_atol=tangent_atol)  # fmt: skip
+    cuts = dict(segments=int(segments), max_segments=int(max_segments))
     if shooting == "multiple":
-        return find_orbit_multiple(system, z, period, segments=int(segments), **kw)
+        return find_orbit_multiple(system, z, period, **cuts, **kw)
     orbit = _find_single(system, z, period, **kw)
     if shooting == "auto" and orbit.status in ("no-progress", "max-iter"):
-        multi = find_orbit_multiple(system, z, period, segments=int(segments), **kw)
+        multi = find_orbit_multiple(system, z, period, **cuts, **kw)
         if multi.converged or multi.residual < orbit.residual:
             return multi
     return orbit
