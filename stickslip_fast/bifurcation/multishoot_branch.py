@@ -75,9 +75,10 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
     """(x, mesh): x = (u, lambda) of the orbit through z (period T) on the section, corrected
     by Newton at fixed lambda, or None if it does not converge. With ``mesh_limit``, the
     mesh is refined where a segment amplifies more than that (:func:`refine_mesh`, up to
-    ``max_segments``) and the orbit corrected again on it. ``known``: (mesh, starts) of the orbit already cut
-    into segments (``Orbit.segments``); they replace ``segments`` and the one trajectory
-    from z, which for a very unstable orbit leaves it within the period."""
+    ``max_segments``) and the orbit corrected again on it. ``known``: (mesh, starts) of
+    the orbit already cut into segments (``Orbit.segments``); they replace ``segments``
+    and the one trajectory from z, which for a very unstable orbit leaves it within the
+    period."""
     if known is not None:
         segments = np.asarray(known[0], dtype=float)
     _, _, shooting_at = ms_evaluator(system, param, segments, rtol, atol, fd_step)
@@ -109,19 +110,21 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
     ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
     segments are cut again (:func:`.multishoot.remesh`) wherever one amplifies by more
     than :data:`.multishoot.REMESH_LIMIT` (into at most ``max_segments``); the branch is
-    then followed in pieces, one per mesh (:func:`walk_pieces`). ``chord``: (d_state, d_lambda), the way the branch goes on
-    from x0 (a section point's change and the parameter's: the tangent of the walk that
-    came to x0); when given, the first tangent is oriented along it instead of by
-    ``direction`` in lambda, which is undefined at a fold."""
+    then followed in pieces, one per mesh (:func:`walk_pieces`). ``chord``: (d_state,
+    d_lambda), the way the branch goes on from x0 (a section point's change and the
+    parameter's: the tangent of the walk that came to x0); when given, the first tangent
+    is oriented along it instead of by ``direction`` in lambda, which is undefined at a
+    fold."""
     settings = [(tol, rtol, atol, ds_min)]
     if sharp_ends:
         for stage in stages:
             nxt = tuple(min(a, b) for a, b in zip(settings[-1], stage))
             if nxt != settings[-1]:
                 settings.append(nxt)
-    kw = dict(ds=ds, ds_max=ds_max, max_points=max_points, fd_step=fd_step)
+    kw = dict(ds=ds, ds_max=ds_max, max_points=max_points, fd_step=fd_step, chord=chord,
+              max_segments=max_segments)  # fmt: skip
     pieces, status = walk_pieces(system0, param, x0, direction, bounds, segments, settings,
-                                 remesh, dict(kw, chord=chord, max_segments=max_segments))  # fmt: skip
+                                 remesh, kw)  # fmt: skip
     _, system_at, _ = ms_evaluator(system0, param, segments, rtol, atol, fd_step)
     if status == "nonsmooth":
         last = pieces[-1]

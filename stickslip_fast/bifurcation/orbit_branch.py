@@ -310,7 +310,8 @@ def _go_on_multiple(
     lam = float(branch.values[-1])
     system = dataclasses.replace(orbit.system, **{param: lam})
     x0, mesh = ms_start(system, branch.points[-1], float(branch.T[-1]), param, segments, rtol,
-                        atol, kw["fd_step"], tol, MESH_LIMIT, max_segments=max_segments)  # fmt: skip
+                        atol, kw["fd_step"], tol, MESH_LIMIT,
+                        max_segments=max_segments)  # fmt: skip
     if x0 is None:
         return branch
     direction = float(np.sign(branch.values[-1] - branch.values[-2]) or 1.0)
