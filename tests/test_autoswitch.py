@@ -30,9 +30,10 @@ def test_non_stiff_van_der_pol_stays_explicit_and_matches_scipy():
     assert st == 0 and t == 20.0
     ref = _vdp_scipy(1.0, y0, 20.0)
     assert np.max(np.abs(y - ref)) < 1e-8
-    to_stiff, to_explicit, steps_erk, steps_ros = stats
+    to_stiff, to_explicit, steps_erk, steps_ros, tries_erk, tries_ros = stats
     # never stiff: DOPRI5 all the way
     assert to_stiff == 0 and to_explicit == 0 and steps_ros == 0 and steps_erk == ns
+    assert tries_ros == 0 and tries_erk == ns + nr
 
 
 def test_stiff_van_der_pol_switches_both_ways_and_matches_scipy():
@@ -44,9 +45,10 @@ def test_stiff_van_der_pol_switches_both_ways_and_matches_scipy():
     ref = _vdp_scipy(mu, y0, t_end)
     assert abs(y[0] - ref[0]) < 1e-7 * abs(ref[0])
     assert abs(y[1] - ref[1]) < 1e-6 * max(1.0, abs(ref[1]))
-    to_stiff, to_explicit, steps_erk, steps_ros = stats
+    to_stiff, to_explicit, steps_erk, steps_ros, tries_erk, tries_ros = stats
     assert to_stiff >= 2 and to_explicit >= 1  # slow branch -> jump -> slow branch
     assert steps_erk > 0 and steps_ros > 0 and steps_erk + steps_ros == ns
+    assert tries_erk >= steps_erk and tries_ros >= steps_ros and tries_erk + tries_ros == ns + nr
     # the stiff branches go to the Rosenbrock method: far fewer steps than DOPRI5 alone
     assert ns < 20_000
 
@@ -101,6 +103,10 @@ def test_auto_switches_both_ways_on_the_asymmetric_preset(asymmetric_runs):
     assert abs(sw["to_stiff"] - sw["to_explicit"]) <= 1
     assert sw["steps_explicit"] > 0 and sw["steps_rosenbrock"] > 0
     assert sw["steps_explicit"] + sw["steps_rosenbrock"] == auto.n_steps
+    # every attempt is one method's: accepted or rejected
+    assert sw["attempts_explicit"] + sw["attempts_rosenbrock"] == auto.n_steps + auto.n_rejected
+    assert sw["attempts_explicit"] > sw["steps_explicit"]
+    assert sw["attempts_rosenbrock"] > sw["steps_rosenbrock"]
 
 
 def test_auto_poincare_points_equal_rodas5p_within_tolerance(asymmetric_runs):
@@ -164,3 +170,26 @@ def test_auto_settings():
     with pytest.raises(ValueError, match="not used by 'auto'"):
         ssf.simulate(system, 10.0, method="auto", h=1e-3)
     assert "auto" in ssf.METHODS
+
+
+def test_floor_benchmark_prices_each_method_attempt_at_its_bare_cost():
+    """benchmarks/autoswitch_floor.py's floor: attempts x bare costs, against LSODA / goal."""
+    from benchmarks import autoswitch_floor as floor_mod  # the repository root is on the path
+
+    sw = dict(attempts_explicit=1000, attempts_rosenbrock=300, steps_explicit=900,
+              steps_rosenbrock=200)  # fmt: skip
+    matched = {"cases": {"c": {"targets": {
+        "1e-06": dict(auto=dict(time=1.0e-3, switching=sw), peer=dict(time=2.4e-3)),
+        "1e-08": dict(auto=dict(time=2.0e-3, switching=sw), peer=dict(time=3.0e-3)),
+    }}}}  # fmt: skip
+    bare = {"c": dict(explicit_attempt=200.0, rosenbrock_attempt=400.0, rosenbrock_accept=50.0)}
+    f = floor_mod.floors(matched, bare)
+    lo = f["c/1e-06"]
+    # 1000 * 200 ns + 300 * 400 ns + 200 * 50 ns = 0.33 ms
+    assert lo["floor"] == pytest.approx(0.33e-3, rel=1e-12)
+    assert lo["budget"] == pytest.approx(0.8e-3) and lo["goal"] == 3.0
+    assert lo["speedup_at_floor"] == pytest.approx(2.4 / 0.33)
+    # accepted steps only: 900 * 200 + 200 * (400 + 50) ns = 0.27 ms
+    assert lo["floor_no_rejections"] == pytest.approx(0.27e-3, rel=1e-12)
+    hi = f["c/1e-08"]
+    assert hi["goal"] == 2.0 and hi["auto_over_floor"] == pytest.approx(2 / 0.33)

@@ -30,7 +30,8 @@ samples see is continuous across a switch.
 
 Statistics (the last :data:`N_AUTO_STATS` slots of the workspace's ``flags``,
 which :func:`.trajectory._run` copies out): switches to stiff and to explicit,
-and the accepted steps of each method. Nothing here is compiled unless a run asks for
+the accepted steps of each method and the attempted steps of each (accepted and
+rejected). Nothing here is compiled unless a run asks for
 "auto" (its records are types of their own).
 """
 
@@ -121,14 +122,18 @@ assert DOPRI5_METHOD.q == RODAS5P_METHOD.q == AUTO_METHOD.q
 assert DOPRI5_METHOD.P.shape[0] - 1 == RODAS5P_METHOD.H.shape[0]
 
 # slots of AutoWorkspace.flags (slot 0: the Jacobian is fresh, as in StepWorkspace)
-A_MODE, A_N_STIFF, A_N_CALM, A_TO_STIFF, A_TO_EXPLICIT, A_STEPS_ERK, A_STEPS_ROS = range(1, 8)
+(A_MODE, A_N_STIFF, A_N_CALM, A_TO_STIFF, A_TO_EXPLICIT, A_STEPS_ERK, A_STEPS_ROS,
+ A_TRIES_ERK, A_TRIES_ROS) = range(1, 10)  # fmt: skip
 #: Size of AutoWorkspace.flags; the statistics are its last N_AUTO_STATS slots
 #: (read by :func:`.trajectory._run` on any workspace whose flags are this long).
-N_AUTO_FLAGS = 8
+N_AUTO_FLAGS = 10
 # slots of AutoWorkspace.fst
 A_H, A_HRHO = range(2)
 #: The statistics, in order (``flags[A_TO_STIFF:]``).
-AUTO_STATS = ("to_stiff", "to_explicit", "steps_explicit", "steps_rosenbrock")
+AUTO_STATS = (
+    "to_stiff", "to_explicit", "steps_explicit", "steps_rosenbrock", "attempts_explicit",
+    "attempts_rosenbrock",
+)  # fmt: skip
 N_AUTO_STATS = len(AUTO_STATS)
 
 #: The workspace: :class:`~.steppers.StepWorkspace`'s fields (K with the larger
@@ -243,11 +248,13 @@ def _auto_step(method, prob, lin, y, h, ws):
         def impl(method, prob, lin, y, h, ws):
             ws.fst[A_H] = h
             if ws.flags[A_MODE] == 0:
+                ws.flags[A_TRIES_ERK] += 1
                 e = method.erk
                 ws.fst[A_HRHO] = _erk_step_rho(
                     e.A, e.b, e.b_err, prob, y, h, ws.K, ws.ytmp, ws.ynew, ws.err, ws.y6
                 )
                 return True
+            ws.flags[A_TRIES_ROS] += 1
             return ros_step(method.ros, prob, lin, y, h, ws)
 
         return impl

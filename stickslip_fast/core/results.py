@@ -62,7 +62,9 @@ class SimulationResult:
     switching : dict or None
         With ``method="auto"``: ``to_stiff`` and ``to_explicit`` (switches each
         way), ``steps_explicit`` and ``steps_rosenbrock`` (accepted steps of each
-        method); None for the other methods.
+        method), ``attempts_explicit`` and ``attempts_rosenbrock`` (attempted steps of
+        each, accepted and rejected: they sum to ``n_steps + n_rejected``); None for the
+        other methods.
     """
 
     system: System

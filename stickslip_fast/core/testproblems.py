@@ -205,7 +205,8 @@ def solve_test_problem_auto(prob, y0, t_end, rtol, atol, max_steps):
     """Integrate a test problem with ``method="auto"`` (:mod:`.autoswitch`) on the driver.
 
     Returns (final state, status, accepted steps, rejected steps, final time,
-    statistics: switches to stiff, to explicit, explicit and Rosenbrock steps).
+    statistics: switches to stiff, to explicit, explicit and Rosenbrock steps accepted, then
+    attempted).
     """
     y = y0.copy()
     ws = alloc_workspace(AUTO_METHOD, y.size)

@@ -84,12 +84,11 @@ _JIT = JIT
 
 
 # slots of the integer and float statistics arrays; I_TO_STIFF ... for method="auto"
-# (:data:`.autoswitch.AUTO_STATS`: switches each way, accepted steps of each method)
+# (:data:`.autoswitch.AUTO_STATS`: switches each way, accepted and attempted steps of
+# each method)
 I_STEPS, I_REJECTED, I_CROSSINGS, I_SAMPLES = range(4)
-I_TO_STIFF, I_TO_EXPLICIT, I_STEPS_EXPLICIT, I_STEPS_ROSENBROCK = range(4, 8)
-
-
-N_STAT_I = 8
+I_TO_STIFF = 4
+N_STAT_I = I_TO_STIFF + N_AUTO_STATS
 F_T_FINAL, F_AMPLITUDE, F_T_CONVERGED, F_REST_TIME = range(4)
 N_STAT_F = 4
 
@@ -386,7 +385,7 @@ def integrate(
     total), ``samples`` (uniform grid from t_transient), ``y_end`` (state at the
     last accepted time), ``stat_i`` (steps, rejected, crossings, samples; with
     ``N_STAT_I`` slots and method="auto" also switches to stiff and to explicit,
-    explicit and Rosenbrock steps, zero for the other methods) and
+    explicit and Rosenbrock steps accepted and attempted, zero for the other methods) and
     ``stat_f`` (final time, the :func:`motion_measure` of the recording window,
     time of convergence, time at rest at the end: -1 if moving). With ``rs.stop_kind`` STOP_WHEN_CONVERGED the run
     ends once it has converged (see :func:`stoprules.converged_stop`). ``abort``
