@@ -39,7 +39,6 @@ Result: ``results/autoswitch_floor.json`` (``--out``), with the machine.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 from pathlib import Path
@@ -67,7 +66,7 @@ from stickslip_fast.core.steppers import (
 
 from . import peers
 from .autoswitch import CASES, runners
-from .common import machine_info, ssf
+from .common import machine_info, ssf, write_result
 from .peer_precision import LADDER, TARGETS, point_error
 from .profile_kernel import _ns
 from .reference import trajectory_reference
@@ -283,9 +282,7 @@ def main(argv=None) -> int:
             f"peer / {f['goal']:g} = {f['budget'] * 1e3:.2f} ms: auto {f['speedup_auto']:.2f}x, "
             f"at the floor {f['speedup_at_floor']:.2f}x, with no rejected attempt "
             f"{f['speedup_no_rejections']:.2f}x")  # fmt: skip
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=1, default=float))
-    log(f"wrote {args.out}")
+    write_result(args.out, result, log)
     return 0
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import platform
 import sys
@@ -84,6 +85,13 @@ def machine_info() -> dict:
         except PackageNotFoundError:
             info[dist] = None
     return info
+
+
+def write_result(path: Path, result: dict, log=print) -> None:
+    """Write one benchmark's result record as JSON (the folders made) and say where."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=1, default=float))
+    log(f"wrote {path}")
 
 
 def best_time(fn, max_repeats: int = 3, budget: float = 1.0):
