@@ -202,13 +202,17 @@ def matched_runs(log, rounds: int, cases, targets) -> dict:
         rows = {}
         for target in targets:
             picks = {n: _first_rtol(run[n], system, p, tr, ref, target) for n in names}
+            missed = [n for n in names if picks[n][0] is None]
+            if missed:
+                rows[f"{target:g}"] = dict(note=f"target not reached on the ladder: {missed}")
+                log(f"  {tr['key']} {target:g}: not reached by {missed}")
+                continue
             best = dict.fromkeys(names, math.inf)
             for _ in range(rounds):  # alternate, best of the rounds
                 for n in names:
-                    if picks[n][0] is not None:
-                        t0 = time.perf_counter()
-                        run[n](system, p, tr, picks[n][0])
-                        best[n] = min(best[n], time.perf_counter() - t0)
+                    t0 = time.perf_counter()
+                    run[n](system, p, tr, picks[n][0])
+                    best[n] = min(best[n], time.perf_counter() - t0)
             r = picks["engine auto"][2]
             rows[f"{target:g}"] = dict(
                 auto=dict(rtol=picks["engine auto"][0], error=picks["engine auto"][1],
@@ -229,6 +233,8 @@ def floors(matched: dict, bare: dict) -> dict:
     out = {}
     for key, case in matched["cases"].items():
         for tgt, row in case["targets"].items():
+            if "auto" not in row:  # a target the ladder did not reach
+                continue
             sw = row["auto"]["switching"]
             b = bare[key]
             parts = dict(
