@@ -257,6 +257,7 @@ def test_the_walk_on_from_single_shooting_does_not_turn_back():
     from stickslip_fast.bifurcation.multishoot import MESH_LIMIT
     from stickslip_fast.bifurcation.multishoot_branch import continue_multiple, ms_start
     from stickslip_fast.bifurcation.orbit_branch import WAY_BACK, _turns_back
+    from stickslip_fast.bifurcation.walk_args import WalkSettings
 
     pts = np.array([[0.3, 0.0, 0.2, 0.0], [0.2, 0.0, 0.1, 0.0], [0.1, 0.0, 0.05, 0.0],
                     [0.1 + 1e-12, 0.0, 0.05, 0.0]])  # fmt: skip
@@ -290,8 +291,8 @@ def test_the_walk_on_from_single_shooting_does_not_turn_back():
     x0, mesh = ms_start(s, orbit.points[0], orbit.T, "eta", 3, kw["rtol"], kw["atol"],
                         kw["fd_step"], kw["tol"], MESH_LIMIT)  # fmt: skip
     for chord, down in ((None, False), ((np.zeros(4), -1e-3), True)):
-        br = continue_multiple(s, "eta", 1, x0, 1.0, (1.9, 2.1), segments=mesh, stages=(),
-                               chord=chord, **kw)  # fmt: skip
+        br = continue_multiple(s, "eta", 1, x0, 1.0, (1.9, 2.1), WalkSettings(**kw),
+                               segments=mesh, stages=(), chord=chord)  # fmt: skip
         assert br.values.size == 3 and (br.values[-1] < 2.0) == down, br.values
 
 

@@ -26,6 +26,7 @@ from .multishoot import (
 from .multishoot_orbit import initial_segments, newton_multiple
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
+from .walk_args import WalkSettings
 
 
 def multiplier_tests(A, t: np.ndarray) -> dict[str, float]:
@@ -102,12 +103,11 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
     return np.r_[u, float(getattr(system, param))], ms.mesh
 
 
-def continue_multiple(system0, param, period, x0, direction, bounds, *, segments, ds, ds_min,
-                      ds_max, max_points, tol, rtol, atol, fd_step, stick_events,
-                      sharp_ends, stages, remesh=False, chord=None,
+def continue_multiple(system0, param, period, x0, direction, bounds, walk: WalkSettings, *,
+                      segments, stages, remesh=False, chord=None,
                       max_segments=MAX_SEGMENTS) -> Branch:  # fmt: skip
-    """The branch through x0 = (u, lambda) by multiple shooting (``continue_orbit``'s arguments;
-    ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
+    """The branch through x0 = (u, lambda) by multiple shooting (``walk``: ``continue_orbit``'s
+    settings; ``stages``: its sharp-end stages, (tol, rtol, atol, ds_min)). With ``remesh`` the
     segments are cut again (:func:`.multishoot.remesh`) wherever one amplifies by more
     than :data:`.multishoot.REMESH_LIMIT` (into at most ``max_segments``); the branch is
     then followed in pieces, one per mesh (:func:`walk_pieces`). ``chord``: (d_state,
@@ -115,17 +115,17 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
     parameter's: the tangent of the walk that came to x0); when given, the first tangent
     is oriented along it instead of by ``direction`` in lambda, which is undefined at a
     fold."""
-    settings = [(tol, rtol, atol, ds_min)]
-    if sharp_ends:
+    settings = [(walk.tol, walk.rtol, walk.atol, walk.ds_min)]
+    if walk.sharp_ends:
         for stage in stages:
             nxt = tuple(min(a, b) for a, b in zip(settings[-1], stage))
             if nxt != settings[-1]:
                 settings.append(nxt)
-    kw = dict(ds=ds, ds_max=ds_max, max_points=max_points, fd_step=fd_step, chord=chord,
-              max_segments=max_segments)  # fmt: skip
+    kw = dict(ds=walk.ds, ds_max=walk.ds_max, max_points=walk.max_points,
+              fd_step=walk.fd_step, chord=chord, max_segments=max_segments)  # fmt: skip
     pieces, status = walk_pieces(system0, param, x0, direction, bounds, segments, settings,
                                  remesh, kw)  # fmt: skip
-    _, system_at, _ = ms_evaluator(system0, param, segments, rtol, atol, fd_step)
+    _, system_at, _ = ms_evaluator(system0, param, segments, walk.rtol, walk.atol, walk.fd_step)
     if status == "nonsmooth":
         last = pieces[-1]
         last.bifs.append(("section-grazing", float(last.xs[-1][-1]), len(last.xs) - 1,
@@ -136,7 +136,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
         off = len(vals) - skip
         starts = [pc.ms.unpack(x[:-1])[0] for x in pc.xs]
         T = pc.xs[:, -2].copy()
-        if stick_events:
+        if walk.stick_events:
             c, t = _stick_events(pc.xs, starts, T, system_at, pc.ms, pc.evaluate, pc.tol,
                                  pc.bifs)  # fmt: skip
             counts.extend(c[skip:])
@@ -154,8 +154,8 @@ def continue_multiple(system0, param, period, x0, direction, bounds, *, segments
         points=np.array(pts), T=np.array(Ts), multipliers=mults,
         stable=np.all(np.abs(mults) < 1.0, axis=1),
         bifurcations=[Bifurcation(*b) for b in bifs], status=status,
-        stick_count=np.array(counts, dtype=np.int64) if stick_events else None,
-        stick_time=np.array(times) if stick_events else None, segments=segs,
+        stick_count=np.array(counts, dtype=np.int64) if walk.stick_events else None,
+        stick_time=np.array(times) if walk.stick_events else None, segments=segs,
     )  # fmt: skip
 
 

@@ -21,7 +21,7 @@ from .orbits import (
     return_map,
     stick_phases,
 )
-from .walk_args import _check_args
+from .walk_args import WalkSettings, _check_args
 
 #: Tighter settings :func:`continue_orbit` goes on with, in turn, where the corrector fails
 #: at ``ds_min`` (``sharp_ends=True``): (tol, rtol, atol, ds_min). The sharp ends of
@@ -225,14 +225,15 @@ def continue_orbit(
     check_shooting(shooting, segments, max_segments)
     if remesh and shooting == "single":
         raise ValueError("remesh needs shooting='multiple' or 'auto', got shooting='single'")
-    kw = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol, rtol=rtol,
-              atol=atol, fd_step=fd_step, stick_events=stick_events, sharp_ends=sharp_ends)  # fmt: skip
+    walk = WalkSettings(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol,
+                        rtol=rtol, atol=atol, fd_step=fd_step, stick_events=stick_events,
+                        sharp_ends=sharp_ends)  # fmt: skip
     mesh_args = (int(segments), bool(remesh), int(max_segments))
     if shooting == "multiple":
-        return _continue_multiple_from(orbit, param, (lo, hi), direction, mesh_args, kw)
-    branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, **kw)
+        return _continue_multiple_from(orbit, param, (lo, hi), direction, mesh_args, walk)
+    branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, walk)
     if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
-        branch = _go_on_multiple(branch, orbit, (lo, hi), mesh_args, kw, way_on)
+        branch = _go_on_multiple(branch, orbit, (lo, hi), mesh_args, walk, way_on)
     return branch
 
 
@@ -245,22 +246,21 @@ def _continue_multiple_from(
     bounds: tuple[float, float],
     direction: float,
     mesh_args: tuple[int, bool, int],
-    kw,
+    walk: WalkSettings,
 ) -> Branch:
     """continue_orbit with shooting="multiple": the orbit corrected by multiple shooting
     (``segments`` even cuts, or the orbit's own segments if it was found by multiple
     shooting; refined by :data:`MESH_LIMIT`), then continued. ``mesh_args``:
     (segments, remesh, max_segments) of :func:`continue_orbit`."""
     segments, remesh, max_segments = mesh_args
-    rtol, atol, fd_step, tol = kw["rtol"], kw["atol"], kw["fd_step"], kw["tol"]
-    x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, segments, rtol, atol,
-                        fd_step, tol, MESH_LIMIT, known=orbit.segments,
+    x0, mesh = ms_start(orbit.system, orbit.points[0], orbit.T, param, segments, walk.rtol,
+                        walk.atol, walk.fd_step, walk.tol, MESH_LIMIT, known=orbit.segments,
                         max_segments=max_segments)  # fmt: skip
     if x0 is None:
         raise ValueError("orbit could not be corrected by multiple shooting")
-    return continue_multiple(orbit.system, param, orbit.period, x0, direction, bounds,
+    return continue_multiple(orbit.system, param, orbit.period, x0, direction, bounds, walk,
                              segments=mesh, stages=SHARP_END_STAGES, remesh=remesh,
-                             max_segments=max_segments, **kw)  # fmt: skip
+                             max_segments=max_segments)  # fmt: skip
 
 
 def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
@@ -291,17 +291,22 @@ def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
 
 
 def _go_on_multiple(
-    branch: Branch, orbit: Orbit, bounds, mesh_args: tuple[int, bool, int], kw, way_on=None
+    branch: Branch,
+    orbit: Orbit,
+    bounds,
+    mesh_args: tuple[int, bool, int],
+    walk: WalkSettings,
+    way_on=None,
 ) -> Branch:
     """``branch`` continued by multiple shooting from its last point (shooting="auto"),
     along ``way_on`` (the single-shooting walk's last tangent) or against it.
     ``mesh_args``: (segments, remesh, max_segments) of :func:`continue_orbit`."""
     segments, remesh, max_segments = mesh_args
-    if branch.values.size < 2 or kw["max_points"] - branch.values.size < 2:
+    if branch.values.size < 2 or walk.max_points - branch.values.size < 2:
         return branch
     # the tightest tolerances the single-shooting branch used (the last sharp-end stage)
-    tol, rtol, atol, ds_min = kw["tol"], kw["rtol"], kw["atol"], kw["ds_min"]
-    if kw["sharp_ends"]:
+    tol, rtol, atol, ds_min = walk.tol, walk.rtol, walk.atol, walk.ds_min
+    if walk.sharp_ends:
         for stage in SHARP_END_STAGES:
             tol, rtol, atol, ds_min = (min(a, b) for a, b in zip((tol, rtol, atol, ds_min), stage))
     # not below the segments' integration noise (docs/orbits.md, "Multiple shooting")
@@ -310,27 +315,28 @@ def _go_on_multiple(
     lam = float(branch.values[-1])
     system = dataclasses.replace(orbit.system, **{param: lam})
     x0, mesh = ms_start(system, branch.points[-1], float(branch.T[-1]), param, segments, rtol,
-                        atol, kw["fd_step"], tol, MESH_LIMIT,
+                        atol, walk.fd_step, tol, MESH_LIMIT,
                         max_segments=max_segments)  # fmt: skip
     if x0 is None:
         return branch
     direction = float(np.sign(branch.values[-1] - branch.values[-2]) or 1.0)
-    kw2 = dict(kw, tol=tol, rtol=rtol, atol=atol, ds=max(kw["ds_min"], ds_min * 100),
-               ds_min=ds_min, max_points=kw["max_points"] - branch.values.size + 1)  # fmt: skip
-    kw2["ds"] = min(kw2["ds"], kw["ds_max"])
+    walk2 = dataclasses.replace(
+        walk, tol=tol, rtol=rtol, atol=atol, ds=min(max(walk.ds_min, ds_min * 100), walk.ds_max),
+        ds_min=ds_min, max_points=walk.max_points - branch.values.size + 1,
+    )  # fmt: skip
     way_on = way_on or (np.zeros(branch.points.shape[1]), direction)
     # A probe of a few points first: where single shooting stopped in a crawl at a fold,
     # its last tangent can point back along the branch it came by (k12 = -0.8316, eta =
     # 2.5706); the leading multiplier tells: onwards it moves away from its values before.
-    kw_probe = dict(kw2, max_points=PROBE_POINTS, stick_events=False)
     probe = continue_multiple(system, param, orbit.period, x0, direction, bounds,
-                              segments=mesh, stages=(), remesh=False, chord=way_on,
-                              **kw_probe)  # fmt: skip
+                              dataclasses.replace(walk2, max_points=PROBE_POINTS,
+                                                  stick_events=False),
+                              segments=mesh, stages=(), remesh=False, chord=way_on)  # fmt: skip
     if _turns_back(branch, probe):
         way_on, direction = (-way_on[0], -way_on[1]), -direction
-    second = continue_multiple(system, param, orbit.period, x0, direction, bounds,
+    second = continue_multiple(system, param, orbit.period, x0, direction, bounds, walk2,
                                segments=mesh, stages=(), remesh=remesh, chord=way_on,
-                               max_segments=max_segments, **kw2)  # fmt: skip
+                               max_segments=max_segments)  # fmt: skip
     second.system = orbit.system
     return append_branch(branch, second, f"single shooting: {branch.status}")
 
@@ -390,15 +396,15 @@ def _cut_at_period_jump(xs, mults, T, bifs, status):
     return xs[: k + 1], mults[: k + 1], T[: k + 1], "nonsmooth"
 
 
-def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_max, max_points,
-                     tol, rtol, atol, fd_step, stick_events, sharp_ends):  # fmt: skip
-    """continue_orbit with shooting="single" (its arguments): (the Branch, its way on).
+def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
+    """continue_orbit with shooting="single" (its settings): (the Branch, its way on).
 
     The way on is (d_state, d_lambda): the walk's unit tangent at its last point, oriented
     onwards (by continuity along the branch), in the full state (0 at the section's
     coordinate) and the parameter; None if the walk accepted no point."""
     system0 = orbit.system
     p = orbit.period
+    tol, rtol, atol, fd_step = walk.tol, walk.rtol, walk.atol, walk.fd_step
     evaluate, full, system_at, periods = _orbit_evaluator(system0, param, p, rtol, atol, fd_step)
     kw = dict(rtol=rtol, atol=atol)
     mask = np.arange(system0.n_state) != SECTION_INDEX
@@ -413,8 +419,8 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
         return bool(np.max(np.abs(f)) < EQUILIBRIUM_SPEED)
 
     refine = []
-    if sharp_ends:
-        cur = (tol, rtol, atol, ds_min)
+    if walk.sharp_ends:
+        cur = (tol, rtol, atol, walk.ds_min)
         for stage in SHARP_END_STAGES:
             nxt = tuple(min(a, b) for a, b in zip(cur, stage))
             if nxt != cur:
@@ -431,8 +437,8 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
         return False
 
     xs, mults, bifs, status = pseudo_arclength(
-        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, jump=jump, refine=refine, stop=keep_tangent,
+        evaluate, x0, direction, (lo, hi), ds=walk.ds, ds_min=walk.ds_min, ds_max=walk.ds_max,
+        max_points=walk.max_points, tol=tol, jump=jump, refine=refine, stop=keep_tangent,
     )  # fmt: skip
     T = _return_times(
         xs, periods, lambda x: return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)[2][-1]
@@ -444,7 +450,7 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, *, ds, ds_min, ds_ma
         bifs.append(("section-grazing", float(xs[-1][-1]), len(xs) - 1, xs[-1].copy()))
     points = np.array([full(x) for x in xs])
     stick_count = stick_time = None
-    if stick_events:
+    if walk.stick_events:
         stick_count, stick_time = _stick_events(xs, T, system_at, full, evaluate, periods, tol,
                                                 bifs)  # fmt: skip
         bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))

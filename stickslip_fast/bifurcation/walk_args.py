@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from ..base.messages import plain
@@ -48,3 +49,22 @@ def _check_args(system, what, param, bounds, ds, ds_min, ds_max, tol, max_points
     if isinstance(max_points, bool) or not isinstance(max_points, int) or max_points < 2:
         raise ValueError(f"max_points must be an integer >= 2, got {max_points!r}")
     return lam0, lo, hi
+
+
+@dataclasses.dataclass(frozen=True)
+class WalkSettings:
+    """The settings of one walk along a branch of periodic orbits: those of
+    :func:`~stickslip_fast.bifurcation.orbit_branch.continue_orbit` of the same names, checked
+    there once. A walk's later stages (the sharp ends, multiple shooting after single)
+    run on copies with some fields changed (:func:`dataclasses.replace`)."""
+
+    ds: float
+    ds_min: float
+    ds_max: float
+    max_points: int
+    tol: float
+    rtol: float
+    atol: float
+    fd_step: float
+    stick_events: bool
+    sharp_ends: bool
