@@ -52,8 +52,13 @@ def _grid(values, n_values: int) -> np.ndarray:
     return np.linspace(vals.min(), vals.max(), n_values)
 
 
+def _integration(cfg) -> dict:
+    """A config's integration settings without the two this script sets itself."""
+    return {k: v for k, v in cfg.integration.items() if k not in ("method", "stop")}
+
+
 def _sweeper(cfg):
-    integ = {k: v for k, v in cfg.integration.items() if k not in ("method", "stop")}
+    integ = _integration(cfg)
 
     def sweep(method, values, stop, rtol_factor=1.0):
         kw = dict(integ)
@@ -102,7 +107,7 @@ def diagram_rows(log, n_values: int, rounds: int, configs) -> dict:
 def census_row(log, n_values: int, n_starts: int, rounds: int) -> dict:
     cfg = load_config(ROOT / "data" / "census" / "fig06_census.toml")
     values = _grid(cfg.census["values"], n_values)
-    integ = {k: v for k, v in cfg.integration.items() if k not in ("method", "stop")}
+    integ = _integration(cfg)
 
     def run(method, vals=values):
         return ssf.census(cfg.system, cfg.census["param"], vals, n_starts=n_starts,
