@@ -65,7 +65,7 @@ from stickslip_fast.core.steppers import (
 )
 
 from . import peers
-from .autoswitch import CASES, runners
+from .autoswitch import CASES, _timed, runners
 from .common import machine_info, ssf, write_result
 from .peer_precision import LADDER, TARGETS, point_error
 from .profile_kernel import _ns
@@ -210,9 +210,8 @@ def matched_runs(log, rounds: int, cases, targets) -> dict:
             best = dict.fromkeys(names, math.inf)
             for _ in range(rounds):  # alternate, best of the rounds
                 for n in names:
-                    t0 = time.perf_counter()
-                    run[n](system, p, tr, picks[n][0])
-                    best[n] = min(best[n], time.perf_counter() - t0)
+                    wall, _ = _timed(run[n], system, p, tr, picks[n][0])
+                    best[n] = min(best[n], wall)
             r = picks["engine auto"][2]
             rows[f"{target:g}"] = dict(
                 auto=dict(rtol=picks["engine auto"][0], error=picks["engine auto"][1],
