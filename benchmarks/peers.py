@@ -60,11 +60,18 @@ def rhs1(y, p, out):
     v = y[1] - vb
     w = y[3]
     s = v * v + w * w + eps * eps
-    b = 1.0 / math.sqrt(s) + etap * eps * eps * eps / (s * s)
+    # arranged for latency as the engine's own right-hand side is (the square root beside
+    # the one division, no division after the friction factor), so that the peers and
+    # the engine compare as integrators (docs/performance.md, "Latency of the arithmetic")
+    inv_s = 1.0 / s
+    b = math.sqrt(s) * inv_s + etap * eps * eps * eps * (inv_s * inv_s)
+    inv_m = 1.0 / m
     out[0] = y[1]
-    out[1] = -(c * y[1] + c12 * y[3] + y[0] + k12 * y[2] + mu * v * b)
+    out[1] = -(c * y[1] + c12 * y[3] + y[0] + k12 * y[2]) - (mu * v) * b
     out[2] = y[3]
-    out[3] = -(c12 * y[1] + c * y[3] + k12 * y[0] + y[2] + mu * (2.0 / 3.0) * w * b) / m
+    out[3] = (
+        -(c12 * y[1] + c * y[3] + k12 * y[0] + y[2]) * inv_m - ((2.0 / 3.0) * mu * inv_m * w) * b
+    )
 
 
 @njit(cache=True)

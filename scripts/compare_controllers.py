@@ -25,6 +25,12 @@ Usage::
 
     python3 scripts/compare_controllers.py --old 0.7 0.4 --new 0.85 0.2 --num 100 \\
         --out docs/controller.md --csv docs/controller.csv
+
+For a change of the code rather than of the gains, give the two checkouts instead
+(each run imports ``stickslip_fast`` from its own root; the reference uses the old one)::
+
+    python3 scripts/compare_controllers.py --old-root /path/to/main --new-root . \\
+        --old 0.85 0.2 --new 0.85 0.2 --num 100 --out cmp.md
 """
 
 from __future__ import annotations
@@ -84,12 +90,13 @@ def _worker(alpha: float, beta: float, rtol: float | None, num: int, num_2d: int
     np.savez_compressed(out, **arrays)
 
 
-def _spawn(name: str, gains, rtol, args, out: Path, cache: Path) -> dict[str, np.ndarray]:
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+def _spawn(name: str, gains, rtol, args, out: Path, cache: Path,
+           root: Path) -> dict[str, np.ndarray]:  # fmt: skip
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(root))
     cmd = [sys.executable, __file__, "--worker", json.dumps(dict(
         alpha=gains[0], beta=gains[1], rtol=rtol, num=args.num, num_2d=args.num_2d,
         only=args.only, out=str(out)))]  # fmt: skip
-    print(f"{name}: gains {gains}, rtol {rtol or 'config'}", file=sys.stderr, flush=True)
+    print(f"{name}: gains {gains}, rtol {rtol or 'config'}, {root}", file=sys.stderr, flush=True)
     subprocess.run(cmd, cwd=ROOT, env=env, check=True)
     return dict(np.load(out))
 
@@ -106,6 +113,8 @@ def main() -> int:
     ap.add_argument("--only")
     ap.add_argument("--out", type=Path)
     ap.add_argument("--csv", type=Path)
+    ap.add_argument("--old-root", type=Path, default=ROOT, help="checkout of the old code")
+    ap.add_argument("--new-root", type=Path, default=ROOT, help="checkout of the new code")
     args = ap.parse_args()
     if args.worker:
         w = json.loads(args.worker)
@@ -116,10 +125,13 @@ def main() -> int:
     tmp = Path(tempfile.mkdtemp(prefix="ssf-ctrl-cmp-"))
     try:
         runs = {}
-        for name, gains, rtol in (("old", args.old, None), ("new", args.new, None),
-                                  ("ref", args.old, args.ref_rtol)):  # fmt: skip
-            cache = tmp / f"cache-{name}-{gains[0]}-{gains[1]}"  # old and ref share one
-            runs[name] = _spawn(name, gains, rtol, args, tmp / f"{name}.npz", cache)
+        for name, gains, rtol, root in (("old", args.old, None, args.old_root),
+                                        ("new", args.new, None, args.new_root),
+                                        ("ref", args.old, args.ref_rtol, args.old_root)):  # fmt: skip
+            # old and ref share one cache
+            cache = tmp / f"cache-{gains[0]}-{gains[1]}-{'new' if name == 'new' else 'old'}"
+            runs[name] = _spawn(name, gains, rtol, args, tmp / f"{name}.npz", cache,
+                                root.resolve())  # fmt: skip
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     keys = sorted({k.split("/")[0] for k in runs["old"]})

@@ -111,3 +111,42 @@ def test_jacobian_stiffness_at_stick():
     lam = np.abs(np.linalg.eigvals(dense_jacobian(y, s.to_array(), 1, False))).max()
     expected = s.mu * (1 + eta_prime(5.0)) / s.eps
     assert lam == pytest.approx(expected, rel=0.02)
+
+
+def _rhs_as_written(y, s: System) -> np.ndarray:
+    """The paper's Eq. 15 for one disk on a constant belt, term by term as printed, in
+    extended precision: the reference for the engine's latency-arranged arithmetic."""
+    x, dx, ph, dph = (np.longdouble(v) for v in y)
+    eps, etap, vb = np.longdouble(s.eps), np.longdouble(eta_prime(s.eta)), np.longdouble(s.vb)
+    v, w = dx - vb, dph
+    q = v * v + w * w + eps * eps
+    g = 1 / np.sqrt(q) + etap * eps**3 / q**2
+    t, m_s = v * g, np.longdouble(2) / 3 * w * g
+    ddx = -(s.c * dx + s.c12 * dph) - (x + s.k12 * ph) - s.mu * t
+    ddph = (-(s.c12 * dx + s.c * dph) - (s.k12 * x + ph) - s.mu * m_s) / s.m
+    return np.array([dx, ddx, dph, ddph], dtype=np.longdouble)
+
+
+def test_rhs_matches_the_equation_as_written_and_the_peers_copy():
+    # the right-hand side is arranged for latency (a reciprocal beside the square root,
+    # 1/m as a factor): the same function to within a few ulps of the largest term, at
+    # slips from deep in the stick phase (|v| ~ eps / 100) to fast sliding; the benchmark
+    # peers' own copy (benchmarks/peers.py) likewise, so they integrate the same model
+    from benchmarks.peers import params, rhs1
+
+    rng = np.random.default_rng(7)
+    for eta in (1.2, 3.3, 9.99):
+        s = System.preset("asymmetric", eta=eta).replace(c=0.01, c12=0.003)
+        p, p1 = s.to_array(), params(s.to_dict())
+        for scale in (1e-7, 1e-5, 1e-3, 0.3):
+            for _ in range(50):
+                y = rng.normal(scale=0.1, size=4)
+                y[1] = s.vb + rng.normal(scale=scale)
+                y[3] = rng.normal(scale=scale)
+                ref = _rhs_as_written(y, s)
+                size = float(np.max(np.abs(ref))) + 1.0
+                out, out1 = np.empty(4), np.empty(4)
+                rhs(y, p, 1, False, out)
+                rhs1(y, p1, out1)
+                assert np.max(np.abs(out - ref)) < 8 * np.finfo(float).eps * size
+                assert np.max(np.abs(out1 - ref)) < 8 * np.finfo(float).eps * size

@@ -44,6 +44,7 @@ from .params import (
 __all__ = [
     "eta_prime",
     "friction",
+    "friction_factor",
     "friction_partials",
     "friction_second_partials",
     "rhs",
@@ -62,14 +63,26 @@ _JIT = JIT
 
 
 @njit(**_JIT)
+def friction_factor(v: float, w: float, eps: float, etap: float) -> float:
+    """The common factor g = s^(-1/2) + eta' eps^3 / s^2 of T_s and M_s, s = v^2 + w^2 + eps^2.
+
+    Written as sqrt(s) / s + eta' eps^3 (1/s)^2 so that the square root and the one
+    division run side by side: an integration's steps wait on this value, and
+    1 / sqrt(s) would put the two long latencies one after the other.
+    """
+    s = v * v + w * w + eps * eps
+    inv_s = 1.0 / s
+    return math.sqrt(s) * inv_s + etap * eps * eps * eps * (inv_s * inv_s)
+
+
+@njit(**_JIT)
 def friction(v: float, w: float, eps: float, etap: float) -> tuple[float, float]:
     """Friction force T_s and torque M_s for slip velocity v and spin w.
 
     T_s = v g, M_s = (2/3) w g with g = s^(-1/2) + eta' eps^3 / s^2 and
-    s = v^2 + w^2 + eps^2 (the paper's Eq. 2).
+    s = v^2 + w^2 + eps^2 (the paper's Eq. 2; g from :func:`friction_factor`).
     """
-    s = v * v + w * w + eps * eps
-    g = 1.0 / math.sqrt(s) + etap * eps * eps * eps / (s * s)
+    g = friction_factor(v, w, eps, etap)
     return v * g, (2.0 / 3.0) * w * g
 
 
@@ -80,10 +93,12 @@ def friction_partials(v: float, w: float, eps: float, etap: float):
     With h = dg/ds * 2 = -s^(-3/2) - 4 eta' eps^3 / s^3, dg/dv = v h and dg/dw = w h.
     """
     s = v * v + w * w + eps * eps
-    inv_sqrt = 1.0 / math.sqrt(s)
+    inv_s = 1.0 / s  # beside the square root, as in friction_factor (the same g, bit for bit)
+    inv_sqrt = math.sqrt(s) * inv_s
     e3 = etap * eps * eps * eps
-    g = inv_sqrt + e3 / (s * s)
-    h = -inv_sqrt * inv_sqrt * inv_sqrt - 4.0 * e3 / (s * s * s)
+    inv_s2 = inv_s * inv_s
+    g = inv_sqrt + e3 * inv_s2
+    h = -inv_sqrt * inv_s - 4.0 * e3 * (inv_s2 * inv_s)
     t = v * g
     mm = (2.0 / 3.0) * w * g
     t_v = g + v * v * h
@@ -138,8 +153,16 @@ def _coefficients(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool):
 
 @njit(**_JIT)
 def rhs(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool, dydt: np.ndarray) -> None:
-    """Write dy/dt into ``dydt`` (no allocation)."""
+    """Write dy/dt into ``dydt`` (no allocation).
+
+    Arranged for latency: an explicit stage waits on the previous one's f, so the
+    friction factor g is the last value each component waits for (one product and
+    one difference after it) and no division follows it (1/m and 1/T_b are
+    reciprocals of parameters, ready early).
+    """
     m, k12, c, c12, mu, eps, etap, vb = _coefficients(y, p, n_osc, dc)
+    inv_m = 1.0 / m
+    mu_m = (2.0 / 3.0) * mu * inv_m
     t_sum = 0.0
     for i in range(n_osc):
         j = 4 * i
@@ -147,14 +170,15 @@ def rhs(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool, dydt: np.ndarray) ->
         dx = y[j + 1]
         ph = y[j + 2]
         dph = y[j + 3]
-        t, mm = friction(dx - vb, dph, eps, etap)
-        t_sum += t
+        v = dx - vb
+        g = friction_factor(v, dph, eps, etap)
+        t_sum += v * g  # T_s
         dydt[j] = dx
-        dydt[j + 1] = -(c * dx + c12 * dph) - (x + k12 * ph) - mu * t
+        dydt[j + 1] = (-(c * dx + c12 * dph) - (x + k12 * ph)) - (mu * v) * g
         dydt[j + 2] = dph
-        dydt[j + 3] = (-(c12 * dx + c * dph) - (k12 * x + ph) - mu * mm) / m
+        dydt[j + 3] = (-(c12 * dx + c * dph) - (k12 * x + ph)) * inv_m - (mu_m * dph) * g
     if dc:
-        dydt[4 * n_osc] = (p[P_VB0] - vb + p[P_BETA] / n_osc * t_sum) / p[P_TB]
+        dydt[4 * n_osc] = (p[P_VB0] - vb + p[P_BETA] / n_osc * t_sum) * (1.0 / p[P_TB])
 
 
 @njit(**_JIT)

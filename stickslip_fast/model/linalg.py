@@ -64,7 +64,9 @@ def lu_solve(a: np.ndarray, piv: np.ndarray, b: np.ndarray, off: int, n: int) ->
         s = b[off + k]
         for q in range(k + 1, n):
             s -= a[k, q] * b[off + q]
-        b[off + k] = s / a[k, k]
+        # the reciprocal depends on the factor only, so it is ready before s is:
+        # a multiplication, not a division, on the solve's dependency chain
+        b[off + k] = s * (1.0 / a[k, k])
 
 
 @njit(inline="always", **_JIT)
@@ -150,7 +152,7 @@ def w_solve(
         for i in range(n_osc):
             for r in range(4):
                 s += border_row[i, r] * b[4 * i + r]
-        xv = s / schur
+        xv = s * (1.0 / schur)  # the reciprocal is ready before s (see lu_solve)
         for i in range(n_osc):
             for r in range(4):
                 b[4 * i + r] -= z[i, r] * xv
