@@ -211,6 +211,34 @@ def test_find_orbit_max_segments_caps_the_bisection():
         ssf.find_orbit(s, START_UNSTABLE, 1, shooting="multiple", max_segments=4)
 
 
+def test_a_start_stalled_on_the_coarse_mesh_is_refined_and_corrected_there(monkeypatch):
+    # The orbit at mu = 1.1e8 on its 14 segments: at rtol 1e-12 Newton stalls at its
+    # rounding noise, 0.7-2e-11 (measured; once it reached 6.6e-13 by luck), far above
+    # tol 1e-13; refined to 29 segments it gets to ~3e-15. The start is refined when it
+    # stalls within COARSE_RES * tol, and the refined mesh must reach tol itself.
+    from stickslip_fast.bifurcation import multishoot_branch as mb
+
+    orbit = unstable_orbit()
+    calls = []
+    newton = mb.newton_multiple
+
+    def spy(ms, u, tol, max_iter):
+        out = newton(ms, u, tol, max_iter)
+        calls.append((ms.mesh.size - 1, out[0], out[4]))
+        return out
+
+    monkeypatch.setattr(mb, "newton_multiple", spy)
+    args = (orbit.system, orbit.points[0], orbit.T, "eta", 8, 1e-12, 1e-14, 1e-7, 1e-13, 10.0)
+    x0, mesh = mb.ms_start(*args, known=orbit.segments)
+    assert x0 is not None and mesh.size - 1 > 14, calls
+    (n0, st0, res0), (n1, st1, res1) = calls
+    assert n0 == 14 and st0 != "converged" and 1e-13 < res0 <= mb.COARSE_RES * 1e-13
+    assert n1 == mesh.size - 1 and st1 == "converged" and res1 <= 1e-13
+    calls.clear()
+    monkeypatch.setattr(mb, "COARSE_RES", 1.0)  # the old rule: the coarse mesh must reach tol
+    assert mb.ms_start(*args, known=orbit.segments)[0] is None and len(calls) == 1
+
+
 def test_max_segments_caps_the_mesh_not_the_orbit(monkeypatch):
     # The orbit past the upper fold (mu = 1.1e8), found on 14 segments: the continuation
     # refines its mesh where a segment amplifies by more than MESH_LIMIT, to 29 segments by
