@@ -174,3 +174,40 @@ def test_property_no_default_label_is_a_false_orbit(cases):
             assert d[0] in ("equilibrium", "unsettled"), (c[:3], d, s)
         if d[0] == "ok" and d[1] > 0:
             assert s[0] == "ok", (c[:3], d, s)
+
+
+# ------------------------------------ converged stopping near the Hopf point (issue 30)
+#: A small period-1 orbit (x1 in [0.038, 0.060], |dphi1| < 8.2e-5 throughout): at each
+#: of its x1 minima every speed is below equilibrium_tol. Found by the GPU rerun of
+#: 2026-11-27 as the slowest runs of the (eta, k12) map.
+SMALL_ORBIT = {"eta": 1.0360360360360461, "k12": 0.018918918918918948}
+#: A slowly decaying oscillation about steady sliding (amplitude halves every ~400 time
+#: units): its x1 minima change by less than period_tol per period from t ~ 1100 on.
+SLOW_FOCUS = {"eta": 8.65765766, "k12": -0.10540541}
+
+
+@pytest.mark.parametrize("d_eta", [0.0, 1e-11, -1e-11])
+def test_converged_stopping_takes_the_small_orbit_whose_minima_look_at_rest(d_eta):
+    # Before: the points' repeats were refused whenever the state at the crossing looked
+    # at rest, so the run converged or ran to t_end by the 1e-11 (a GPU's rounding), and
+    # a run that converged ended at a crossing and was labelled "unsettled".
+    system = ASYM.replace(eta=SMALL_ORBIT["eta"] + d_eta, k12=SMALL_ORBIT["k12"])
+    conv = ssf.simulate(system, t_end=3000.0, stop="converged", max_points=64)
+    ref = ssf.simulate(system, t_end=3000.0, t_transient=2000.0, max_points=64)
+    assert ref.status == "ok" and ref.period == 1
+    assert conv.status == "ok" and conv.period == 1
+    assert conv.t_converged < 100.0 and conv.t_final < 200.0
+    assert conv.rest_time < 0  # it ended where disk 1 moves
+    np.testing.assert_allclose(conv.poincare[-1], ref.poincare[-1], atol=1e-8)
+
+
+def test_converged_stopping_never_calls_a_slowly_decaying_oscillation_an_orbit():
+    # Its minima repeat to period_tol long before it rests; the geometric extrapolation
+    # of their drift (about 90 times the last change) refuses them. The long window
+    # and converged stopping then agree: steady sliding.
+    system = ASYM.replace(**SLOW_FOCUS)
+    conv = ssf.simulate(system, t_end=3000.0, stop="converged", max_points=64)
+    ref = ssf.simulate(system, t_end=3000.0, t_transient=2000.0, max_points=64)
+    assert ref.status == "equilibrium"
+    assert conv.status == "equilibrium"
+    assert conv.poincare.shape[0] == 0

@@ -44,6 +44,7 @@ else:
 import stickslip_fast as ssf  # noqa: E402
 from stickslip_fast.analysis.sweep import sweep  # noqa: E402
 from stickslip_fast.backends import cuda as cuda_backend  # noqa: E402
+from stickslip_fast.base.status import STATUS_NAMES  # noqa: E402
 from stickslip_fast.io import ConfigMismatchError  # noqa: E402
 
 if REAL_GPU:  # pragma: no cover - only on a machine with a GPU
@@ -137,6 +138,27 @@ def test_converged_stopping_matches_cpu():
                                         max_points=16, progress=False).n_steps[0]  # fmt: skip
 
 
+def test_converged_stopping_near_the_hopf_point_matches_cpu():
+    # the small orbit whose x1 minima look at rest, and the slowly decaying oscillation
+    # whose minima repeat long before it rests (tests/test_classification.py): the
+    # kernel's copy of the stop rule gives the CPU's labels, ending where disk 1 moves
+    from stickslip_fast.backends.local import compute_restart_chunk
+    from stickslip_fast.core.settings import Settings
+
+    settings = Settings.resolve("rodas5p", 3000.0, 0.0, max_points=16).replace(stop="converged")
+    vals = np.array([[1.0360360360360461, 0.018918918918918948], [8.65765766, -0.10540541]])
+    y0 = np.tile(ASYM.initial_state(None), (2, 1))
+    gpu = cuda_backend.compute_restart_chunk_cuda(ASYM, ("eta", "k12"), vals, y0, settings)
+    cpu = compute_restart_chunk(ASYM, ("eta", "k12"), vals, y0, settings)
+    for key in ("status", "period", "count"):
+        np.testing.assert_array_equal(gpu[key], cpu[key], err_msg=key)
+    assert [STATUS_NAMES[c] for c in cpu["status"]] == ["ok", "equilibrium"]
+    assert cpu["period"][0] == 1 and cpu["t_converged"][0] < 100.0
+    # the time the decaying run comes to rest is a threshold crossing of its speeds: a
+    # GPU's fused multiply-adds moved it by 6.4e-6 relative on an H200 (0 in the simulator)
+    np.testing.assert_allclose(gpu["t_converged"], cpu["t_converged"], rtol=1e-4)
+
+
 def test_census_on_the_gpu_matches_cpu(tmp_path):
     # one start per (value, start): continuation units of one-value chains on the device
     kw = dict(n_starts=3, seed=1, t_end=200.0, max_points=16, stop="converged",
@@ -190,8 +212,16 @@ def test_threads_take_runs_from_the_queue(monkeypatch):
     for key in two:
         np.testing.assert_array_equal(two[key], five[key], err_msg=key)
     cpu = compute_restart_chunk(ASYM, ("eta",), eta, y0, settings)
-    for key in ("status", "period", "count", "n_steps", "n_rejected", "n_crossings"):
+    # The simulator runs the CPU's arithmetic; a GPU contracts multiply-adds, so a run's
+    # step count may move by a step or two there (seen on an H200: 948 against 947).
+    exact = ("status", "period", "count") + (
+        () if REAL_GPU else ("n_steps", "n_rejected", "n_crossings")
+    )
+    for key in exact:
         np.testing.assert_array_equal(two[key], cpu[key], err_msg=key)
+    if REAL_GPU:  # pragma: no cover - only on a machine with a GPU
+        for key in ("n_steps", "n_rejected", "n_crossings"):
+            np.testing.assert_allclose(two[key], cpu[key], rtol=0.01, atol=2, err_msg=key)
     np.testing.assert_allclose(two["points"], cpu["points"], rtol=0, atol=POINT_TOL)
     from stickslip_fast.base.status import STATUS_NAMES
 

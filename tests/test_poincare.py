@@ -107,3 +107,35 @@ def test_period_of_the_papers_examples():
     assert asym.status == "ok" and asym.period == 2
     sym = ssf.simulate(ssf.System.preset("symmetric", eta=9.95), 3000.0, 2000.0)
     assert sym.status == "ok" and sym.period == 1
+
+
+def _approach(rho: float, d_last: float, n: int = 40) -> np.ndarray:
+    """n points of 4 equal coordinates approaching 1 geometrically (ratio rho per step),
+    the last step being d_last; rho = 1: a steady drift of d_last per step."""
+    k = np.arange(n)[::-1]  # steps still to come after each point, up to the last
+    if rho == 1.0:
+        x = 1.0 - d_last * k
+    else:  # distance still to go: d_last rho / (1 - rho) after the last point
+        x = 1.0 - d_last * rho / (1.0 - rho) / rho**k
+    return np.ascontiguousarray(np.repeat(x[:, None], 4, axis=1))
+
+
+@pytest.mark.parametrize(
+    ("rho", "d_last", "expected"),
+    [
+        (0.8, 2e-6, 1),  # still to move: 8e-6, within tol x 2 = 2e-5
+        (0.95, 2e-6, 0),  # still to move: 3.8e-5: the points drift on
+        (1.0, 2e-6, 0),  # a steady drift: not contracting
+        (0.95, 1e-12, 1),  # changes at noise level: the ratio says nothing
+    ],
+)
+def test_ring_period_refuses_points_that_still_drift(rho, d_last, expected):
+    # Each of the last 8 changes is within the period tolerance (1e-5 x (1 + 1)) in
+    # every case; what differs is the change still to come, d rho / (1 - rho).
+    from stickslip_fast.core.poincare import ring_period
+
+    pts = _approach(rho, d_last)
+    steps = np.abs(np.diff(pts[:, 0]))
+    assert steps[-1] == pytest.approx(d_last, rel=1e-6, abs=1e-15)
+    assert steps[-9:].max() <= 2e-5
+    assert ring_period(pts, len(pts), 1e-5, 8, 3, 8) == expected

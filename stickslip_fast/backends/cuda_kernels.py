@@ -456,8 +456,10 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 if not converged:
                     continue
                 # ---- converged stopping, as stoprules.converged_now
-                if phase == 1:
-                    if n_cross >= target:
+                if phase == 1:  # ends where disk 1 moves, as stoprules.converged_now
+                    if n_cross >= target and (
+                        math.isnan(d1_rest_since) or (at_rest and t - rest_since >= dwell)
+                    ):
                         running = False
                         break
                     continue
@@ -472,7 +474,18 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     checked = n_cross
                     per = ring_period(pts, n_cross, period_tol, max_period, MIN_REPEATS, MIN_POINTS)
                     # at rest, dx1 flickers around 0 and gives repeating "points"
-                    if per > 0 and not at_rest:
+                    # (as stoprules._flickering: disk 1 at rest since the previous crossing;
+                    # per > 0 implies at least 9 points in the ring, so cap > 0)
+                    flicker = (
+                        per > 0
+                        and at_rest
+                        and (
+                            n_cross < 2
+                            or math.isnan(d1_rest_since)
+                            or d1_rest_since <= tpts[(n_cross - 2) % cap]
+                        )
+                    )
+                    if per > 0 and not flicker:
                         phase = 1
                         t_conv[v] = t
                         target = min(cap, max(MIN_POINTS, 4 * per))

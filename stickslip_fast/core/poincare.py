@@ -83,6 +83,45 @@ def _repeats(pts: np.ndarray, first: int, last: int, per: int, thr: float) -> bo
 
 
 @njit(**_JIT)
+def _largest_change(pts: np.ndarray, first: int, last: int, per: int) -> float:
+    """Largest |difference| (max norm) of points first..last-1 from the point per before each."""
+    cap = pts.shape[0]
+    d = 0.0
+    for j in range(first, last):
+        a = pts[j % cap]
+        b = pts[(j - per) % cap]
+        for i in range(pts.shape[1]):
+            d = max(d, abs(a[i] - b[i]))
+    return d
+
+
+#: Changes below this fraction of the period tolerance are the integration's noise: the
+#: ratio of two successive ones says nothing about convergence (see :func:`_settled`).
+NOISE_FRACTION = 1e-2
+
+
+@njit(**_JIT)
+def _settled(pts: np.ndarray, count: int, per: int, thr: float) -> bool:
+    """Whether points that repeat with period ``per`` to ``thr`` have stopped moving.
+
+    A point sequence that contracts geometrically by rho per period moves on by
+    about d rho / (1 - rho) after a change d (the stopping rule of linearly
+    convergent iterations). A slowly decaying oscillation about an equilibrium
+    (rho near 1) has x1 minima that change by less than ``thr`` per period long
+    before they stop moving: its points are refused until that remaining change is
+    within ``thr`` too. Needs 2 ``per`` points.
+    """
+    d1 = _largest_change(pts, count - per, count, per)
+    if d1 <= NOISE_FRACTION * thr:
+        return True
+    d0 = _largest_change(pts, count - 2 * per, count - per, per)
+    if not d1 < d0:
+        return False  # not contracting
+    rho = d1 / d0
+    return d1 * rho / (1.0 - rho) <= thr
+
+
+@njit(**_JIT)
 def motion_measure(ymin: np.ndarray, ymax: np.ndarray, n_osc: int, dc: bool) -> float:
     """How far the run is from rest over the recording window.
 
@@ -166,17 +205,20 @@ def ring_period(
 
     ``pts`` is a ring buffer holding the most recent of ``count`` points (point
     j in slot j % capacity). Period p is accepted when each of the last
-    m = max(min_points, min_repeats * p) points lies within ``tol`` (max norm,
-    scaled by 1 + the largest |coordinate| of the points compared) of the point
-    p before it, so the m + p most recent points must be in the buffer. Returns
-    0 if no such p exists. Used by converged stopping.
+    m = max(min_points, max(2, min_repeats) * p) points lies within ``tol`` (max
+    norm, scaled by 1 + the largest |coordinate| of the points compared) of the
+    point p before it, so the m + p most recent points must be in the buffer, and
+    the points have stopped drifting (:func:`_settled`). Returns 0 if no such p
+    exists. Used by converged stopping.
     """
     avail = min(count, pts.shape[0])
     for per in range(1, max_period + 1):
-        m = max(min_points, min_repeats * per)
+        m = max(min_points, max(2, min_repeats) * per)  # _settled needs 2 periods
         if m + per > avail:
             break
         thr = tol * (1.0 + _max_abs(pts, count - m - per, count))
         if _repeats(pts, count - m, count, per, thr):
-            return per
+            # a period that repeats but still drifts is refused outright: its
+            # multiples would drift the same way
+            return per if _settled(pts, count, per, thr) else 0
     return 0

@@ -43,10 +43,12 @@ C_CROSS, C_SAMPLES = 0, 1
 #: STOP_AFTER_CROSSINGS (once ``count`` crossings are recorded), or
 #: STOP_CONVERGED (see :func:`converged_stop`): the recorded points repeat with
 #: a period <= ``max_period`` to ``period_tol`` over ``min_repeats`` periods and
-#: at least ``min_points`` points, or the disks have been at rest (speeds, and
-#: the belt-speed range, <= ``equilibrium_tol``) for ``dwell`` time units; then
-#: max(min_points, 4 periods) more crossings are recorded, at most the ring
-#: buffer's capacity (orbit), or the run ends (rest).
+#: at least ``min_points`` points, and have stopped drifting (``ring_period``),
+#: while disk 1 moves between crossings; or the disks have been at rest (speeds,
+#: and the belt-speed range, <= ``equilibrium_tol``) for ``dwell`` time units;
+#: then max(min_points, 4 periods) more crossings are recorded, at most the ring
+#: buffer's capacity, and the run ends at a step where disk 1 moves (orbit), or
+#: the run ends (rest).
 #: ``wmin``/``wmax`` (n,) and ``state`` (STATE_SIZE,) are its working memory.
 StopRule = namedtuple(
     "StopRule",
@@ -160,6 +162,24 @@ def _at_rest(stop, y) -> bool:
 
 
 @njit(**_JIT)
+def _flickering(stop, obs, count, y) -> bool:
+    """True if the latest crossings are round-off flicker of dx1 at rest, not an orbit.
+
+    The disks are at rest now and disk 1 (whose x1 minima are the section) has been at
+    rest since before the previous crossing. The state at a crossing alone cannot tell:
+    there dx1 = 0 by definition, so an orbit on which |dphi1| stays below
+    ``equilibrium_tol`` looks at rest at each of its crossings, though disk 1 moves
+    between them (issue 30's GPU rerun found such runs never converging).
+    """
+    if not _at_rest(stop, y):
+        return False
+    since = stop.state[S_DISK1_REST_SINCE]
+    if count < 2 or math.isnan(since):
+        return True
+    return since <= obs.tpts[(count - 2) % obs.tpts.shape[0]]
+
+
+@njit(**_JIT)
 def track_rest(stop, t, y) -> bool:
     """Update the start of the current stretch at rest (``S_REST_SINCE``); True if at rest.
 
@@ -202,7 +222,11 @@ def converged_now(stop, obs, t, y) -> bool:
     if st[S_PHASE] == 1.0:
         if stop.n_osc > 0:
             track_rest(stop, t, y)  # the run's classification reads the rest time
-        return obs.counts[C_CROSS] >= st[S_TARGET]
+        if obs.counts[C_CROSS] < st[S_TARGET]:
+            return False
+        # End where disk 1 moves: near its x1 minimum an orbit's speeds can all be below
+        # equilibrium_tol, and a run that ended there would read as just come to rest.
+        return math.isnan(st[S_DISK1_REST_SINCE]) or rest_time(stop, t) >= stop.dwell
     # rest: disk speeds within the tolerance, and the belt speed's range, for `dwell`
     if track_rest(stop, t, y) and t - st[S_REST_SINCE] >= stop.dwell:
         # the recording window is the dwell window
@@ -220,7 +244,7 @@ def converged_now(stop, obs, t, y) -> bool:
         )
         # at rest, dx1 flickers around 0 at round-off and gives repeating "points":
         # rest is judged by its dwell window above, never from points
-        if per > 0 and not _at_rest(stop, y):
+        if per > 0 and not _flickering(stop, obs, c, y):
             st[S_PHASE] = 1.0
             st[S_T_CONVERGED] = t
             st[S_PERIOD] = per
