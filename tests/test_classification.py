@@ -211,3 +211,22 @@ def test_converged_stopping_never_calls_a_slowly_decaying_oscillation_an_orbit()
     assert ref.status == "equilibrium"
     assert conv.status == "equilibrium"
     assert conv.poincare.shape[0] == 0
+
+
+def test_a_run_that_converges_too_late_to_record_its_points_is_judged_at_t_end():
+    # Fig. 14's config at eta = 5.45 (a value of scripts/compare_stop_rules.py): the
+    # points stop drifting at t ~ 4911 of the 5000 cap, too late to record the 8 points
+    # that follow convergence; the run then came back "ok" with no period. Now it goes
+    # on unconverged and is judged at t_end like the fixed window: period 1.
+    from pathlib import Path
+
+    from stickslip_fast.cli.config import load_config
+
+    cfg = load_config(Path(__file__).resolve().parents[1] / "data/fig14_symmetric_dcmotor_N2.toml")
+    eta = [np.linspace(1.0, 10.0, 100)[49]]
+    kw = dict(cfg.integration, y0=cfg.y0, progress=False)
+    fixed = ssf.sweep(cfg.system, "eta", eta, **kw)
+    conv = ssf.sweep(cfg.system, "eta", eta, stop="converged", **kw)
+    assert (fixed.status[0], fixed.period[0]) == ("ok", 1)
+    assert (conv.status[0], conv.period[0]) == ("ok", 1)
+    assert np.isnan(conv.t_converged[0])

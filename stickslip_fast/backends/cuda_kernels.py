@@ -473,27 +473,22 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 if n_cross != checked:  # repeating points: checked once per new crossing
                     checked = n_cross
                     per = ring_period(pts, n_cross, period_tol, max_period, MIN_REPEATS, MIN_POINTS)
-                    # at rest, dx1 flickers around 0 and gives repeating "points"
-                    # (as stoprules._flickering: disk 1 at rest since the previous crossing;
-                    # per > 0 implies at least 9 points in the ring, so cap > 0)
-                    flicker = (
-                        per > 0
-                        and at_rest
-                        and (
-                            n_cross < 2
-                            or math.isnan(d1_rest_since)
-                            or d1_rest_since <= tpts[(n_cross - 2) % cap]
-                        )
-                    )
-                    if per > 0 and not flicker:
-                        phase = 1
-                        t_conv[v] = t
+                    if per > 0:  # (then the ring holds at least 9 points)
                         target = min(cap, max(MIN_POINTS, 4 * per))
-                        n_cross = 0  # a fresh recording window from here
-                        checked = 0
-                        for i in range(NS):
-                            ymin[i] = y[i]
-                            ymax[i] = y[i]
+                        # not the round-off flicker of dx1 at rest (disk 1 at rest since the
+                        # previous crossing: stoprules._flickering; NaN: not at rest), and
+                        # time left to record the points (stoprules._in_time)
+                        flicker = at_rest and not d1_rest_since > tpts[(n_cross - 2) % cap]
+                        last = tpts[(n_cross - 1) % cap]
+                        pace = (last - tpts[(n_cross - 1 - per) % cap]) / per
+                        if not flicker and t + (target + 1) * pace <= t_end:
+                            phase = 1
+                            t_conv[v] = t
+                            n_cross = 0  # a fresh recording window from here
+                            checked = 0
+                            for i in range(NS):
+                                ymin[i] = y[i]
+                                ymax[i] = y[i]
             if not t < t_end:
                 running = False
 

@@ -58,6 +58,7 @@ from .stoprules import (  # noqa: F401  (re-exported: the stop rules used to liv
     S_LAST_CROSSING,
     S_N_SEEN,
     S_T_CONVERGED,
+    S_T_END,
     STOP_AFTER_CROSSINGS,
     STOP_AT_END,
     STOP_CONVERGED,
@@ -302,6 +303,7 @@ def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) 
     max_steps = ctl.max_steps
     observe_start(obs, y)
     reset_stop(stop, y)
+    stop.state[S_T_END] = t_end
     stepper_init(method, prob, lin, y, ws)
     adaptive = ctl.h_fixed <= 0.0
     if adaptive:

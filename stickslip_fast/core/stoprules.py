@@ -66,7 +66,9 @@ S_PHASE, S_T_CONVERGED, S_REST_SINCE, S_CHECKED, S_TARGET, S_PERIOD = range(6)
 S_N_SEEN, S_LAST_CROSSING = 6, 7
 # ... and since when disk 1 (whose x1 minima are the section) has been at rest
 S_DISK1_REST_SINCE = 8
-STATE_SIZE = 9
+# the run's t_end (set by the driver at its start; converged stopping reads it)
+S_T_END = 9
+STATE_SIZE = 10
 
 
 @njit(**_JIT)
@@ -162,6 +164,20 @@ def _at_rest(stop, y) -> bool:
 
 
 @njit(**_JIT)
+def _in_time(stop, obs, count, per, target, t) -> bool:
+    """Whether ``target`` more crossings, at the recent pace, fit before ``t_end``.
+
+    A run that converges later records too few points after it; it goes on to
+    ``t_end`` unconverged instead and is classified from all its points, as a
+    fixed window would (Fig. 14 at eta = 5.45 converged at t = 4911 of 5000 and
+    came back with no period).
+    """
+    cap = obs.tpts.shape[0]
+    pace = (obs.tpts[(count - 1) % cap] - obs.tpts[(count - 1 - per) % cap]) / per
+    return t + (target + 1) * pace <= stop.state[S_T_END]
+
+
+@njit(**_JIT)
 def _flickering(stop, obs, count, y) -> bool:
     """True if the latest crossings are round-off flicker of dx1 at rest, not an orbit.
 
@@ -244,12 +260,13 @@ def converged_now(stop, obs, t, y) -> bool:
         )
         # at rest, dx1 flickers around 0 at round-off and gives repeating "points":
         # rest is judged by its dwell window above, never from points
-        if per > 0 and not _flickering(stop, obs, c, y):
+        cap = obs.pts.shape[0]
+        target = min(cap, max(stop.min_points, 4 * per))
+        if per > 0 and not _flickering(stop, obs, c, y) and _in_time(stop, obs, c, per, target, t):
             st[S_PHASE] = 1.0
             st[S_T_CONVERGED] = t
             st[S_PERIOD] = per
-            cap = obs.pts.shape[0]
-            st[S_TARGET] = min(cap, max(stop.min_points, 4 * per))
+            st[S_TARGET] = target
             # a fresh recording window from here: the points after convergence
             obs.counts[C_CROSS] = 0
             for i in range(n):
