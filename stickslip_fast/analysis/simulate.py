@@ -95,11 +95,15 @@ CLASSIFY_PARAMS_DOC = """
         ``"fixed"`` (default): run to ``t_end`` and record after ``t_transient``.
         ``"converged"``: watch the run from t = 0 (``t_transient`` is not used)
         and end it once it has converged: the Poincare points repeat with a
-        period p <= 64 to ``period_tol`` over at least 3 periods and 8 points,
-        or the disks have been at rest (speeds, and the belt-speed range, below
-        ``equilibrium_tol``) for ``dwell``. An orbit then records max(8, 4 p)
-        more points (at most ``max_points``), which are the ones returned.
-        ``t_end`` is the cap; ``t_converged`` is NaN when it was reached first.
+        period p <= 64 to ``period_tol`` over at least 3 periods and 8 points
+        and have stopped drifting (their change still to come, extrapolated
+        geometrically, is within ``period_tol`` too), or the disks have been at
+        rest (speeds, and the belt-speed range, below ``equilibrium_tol``) for
+        ``dwell``. An orbit then records max(8, 4 p) more points (at most
+        ``max_points``), which are the ones returned, and ends where disk 1
+        moves. ``t_end`` is the cap; ``t_converged`` is NaN when it was reached
+        first, or when the points would converge too late to be recorded before
+        it (such a run is judged at ``t_end`` like a fixed window).
     dwell : float, optional
         Time at rest at the end of the run that makes it an equilibrium (see
         ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
