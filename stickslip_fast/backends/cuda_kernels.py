@@ -476,8 +476,8 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     if per > 0:  # (then the ring holds at least 9 points)
                         target = min(cap, max(MIN_POINTS, 4 * per))
                         # not the round-off flicker of dx1 at rest (disk 1 at rest since the
-                        # previous crossing: stoprules._flickering; NaN: not at rest), and
-                        # time left to record the points (stoprules._in_time)
+                        # previous crossing, as stoprules.converged_now; NaN: not at rest), and
+                        # time left to record the points (ditto)
                         flicker = at_rest and not d1_rest_since > tpts[(n_cross - 2) % cap]
                         last = tpts[(n_cross - 1) % cap]
                         pace = (last - tpts[(n_cross - 1 - per) % cap]) / per

@@ -82,43 +82,9 @@ def _repeats(pts: np.ndarray, first: int, last: int, per: int, thr: float) -> bo
     return True
 
 
-@njit(**_JIT)
-def _largest_change(pts: np.ndarray, first: int, last: int, per: int) -> float:
-    """Largest |difference| (max norm) of points first..last-1 from the point per before each."""
-    cap = pts.shape[0]
-    d = 0.0
-    for j in range(first, last):
-        a = pts[j % cap]
-        b = pts[(j - per) % cap]
-        for i in range(pts.shape[1]):
-            d = max(d, abs(a[i] - b[i]))
-    return d
-
-
 #: Changes below this fraction of the period tolerance are the integration's noise: the
-#: ratio of two successive ones says nothing about convergence (see :func:`_settled`).
+#: ratio of two successive ones says nothing about convergence (see :func:`ring_period`).
 NOISE_FRACTION = 1e-2
-
-
-@njit(**_JIT)
-def _settled(pts: np.ndarray, count: int, per: int, thr: float) -> bool:
-    """Whether points that repeat with period ``per`` to ``thr`` have stopped moving.
-
-    A point sequence that contracts geometrically by rho per period moves on by
-    about d rho / (1 - rho) after a change d (the stopping rule of linearly
-    convergent iterations). A slowly decaying oscillation about an equilibrium
-    (rho near 1) has x1 minima that change by less than ``thr`` per period long
-    before they stop moving: its points are refused until that remaining change is
-    within ``thr`` too. Needs 2 ``per`` points.
-    """
-    d1 = _largest_change(pts, count - per, count, per)
-    if d1 <= NOISE_FRACTION * thr:
-        return True
-    d0 = _largest_change(pts, count - 2 * per, count - per, per)
-    if not d1 < d0:
-        return False  # not contracting
-    rho = d1 / d0
-    return d1 * rho / (1.0 - rho) <= thr
 
 
 @njit(**_JIT)
@@ -208,17 +174,39 @@ def ring_period(
     m = max(min_points, max(2, min_repeats) * p) points lies within ``tol`` (max
     norm, scaled by 1 + the largest |coordinate| of the points compared) of the
     point p before it, so the m + p most recent points must be in the buffer, and
-    the points have stopped drifting (:func:`_settled`). Returns 0 if no such p
-    exists. Used by converged stopping.
+    the points have stopped drifting: the change still to come, extrapolated
+    geometrically from the last two periods, is within ``tol`` too. Returns 0 if
+    no such p exists (also when p repeats but drifts). Used by converged stopping.
     """
-    avail = min(count, pts.shape[0])
+    cap = pts.shape[0]
+    avail = min(count, cap)
     for per in range(1, max_period + 1):
-        m = max(min_points, max(2, min_repeats) * per)  # _settled needs 2 periods
+        m = max(min_points, max(2, min_repeats) * per)  # the drift test needs 2 periods
         if m + per > avail:
             break
         thr = tol * (1.0 + _max_abs(pts, count - m - per, count))
         if _repeats(pts, count - m, count, per, thr):
-            # a period that repeats but still drifts is refused outright: its
-            # multiples would drift the same way
-            return per if _settled(pts, count, per, thr) else 0
+            # Have the points stopped drifting? After a change d0 over one period and d1
+            # over the next, a geometric contraction rho = d1 / d0 leaves about
+            # d1 rho / (1 - rho) to come (the stopping rule of linearly convergent
+            # iterations): a slowly decaying oscillation about an equilibrium has minima
+            # that change by less than thr per period long before they stop. Changes
+            # below NOISE_FRACTION thr are noise, whose ratio says nothing. (Inline, not
+            # a compiled helper: each compiled level costs every first run its compile.)
+            d0 = 0.0
+            d1 = 0.0
+            for j in range(count - 2 * per, count):
+                a = pts[j % cap]
+                b = pts[(j - per) % cap]
+                for i in range(pts.shape[1]):
+                    if j < count - per:
+                        d0 = max(d0, abs(a[i] - b[i]))
+                    else:
+                        d1 = max(d1, abs(a[i] - b[i]))
+            if d1 <= NOISE_FRACTION * thr:
+                return per
+            if not d1 < d0:
+                return 0  # not contracting: its multiples would drift the same way
+            rho = d1 / d0
+            return per if d1 * rho / (1.0 - rho) <= thr else 0
     return 0

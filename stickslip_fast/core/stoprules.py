@@ -164,38 +164,6 @@ def _at_rest(stop, y) -> bool:
 
 
 @njit(**_JIT)
-def _in_time(stop, obs, count, per, target, t) -> bool:
-    """Whether ``target`` more crossings, at the recent pace, fit before ``t_end``.
-
-    A run that converges later records too few points after it; it goes on to
-    ``t_end`` unconverged instead and is classified from all its points, as a
-    fixed window would (Fig. 14 at eta = 5.45 converged at t = 4911 of 5000 and
-    came back with no period).
-    """
-    cap = obs.tpts.shape[0]
-    pace = (obs.tpts[(count - 1) % cap] - obs.tpts[(count - 1 - per) % cap]) / per
-    return t + (target + 1) * pace <= stop.state[S_T_END]
-
-
-@njit(**_JIT)
-def _flickering(stop, obs, count, y) -> bool:
-    """True if the latest crossings are round-off flicker of dx1 at rest, not an orbit.
-
-    The disks are at rest now and disk 1 (whose x1 minima are the section) has been at
-    rest since before the previous crossing. The state at a crossing alone cannot tell:
-    there dx1 = 0 by definition, so an orbit on which |dphi1| stays below
-    ``equilibrium_tol`` looks at rest at each of its crossings, though disk 1 moves
-    between them (issue 30's GPU rerun found such runs never converging).
-    """
-    if not _at_rest(stop, y):
-        return False
-    since = stop.state[S_DISK1_REST_SINCE]
-    if count < 2 or math.isnan(since):
-        return True
-    return since <= obs.tpts[(count - 2) % obs.tpts.shape[0]]
-
-
-@njit(**_JIT)
 def track_rest(stop, t, y) -> bool:
     """Update the start of the current stretch at rest (``S_REST_SINCE``); True if at rest.
 
@@ -258,11 +226,26 @@ def converged_now(stop, obs, t, y) -> bool:
         per = ring_period(
             obs.pts, c, stop.period_tol, stop.max_period, stop.min_repeats, stop.min_points
         )
-        # at rest, dx1 flickers around 0 at round-off and gives repeating "points":
-        # rest is judged by its dwell window above, never from points
-        cap = obs.pts.shape[0]
-        target = min(cap, max(stop.min_points, 4 * per))
-        if per > 0 and not _flickering(stop, obs, c, y) and _in_time(stop, obs, c, per, target, t):
+        if per == 0:
+            return False
+        # Not the round-off flicker of dx1 at rest: then the disks are at rest and disk 1
+        # (whose x1 minima are the section) has been since before the previous crossing.
+        # The state at a crossing alone cannot tell, as dx1 = 0 there by definition: an
+        # orbit whose |dphi1| stays below equilibrium_tol looks at rest at each of its
+        # crossings, though disk 1 moves between them (issue 30's GPU rerun found such
+        # runs never converging). (Inline, as below: each compiled helper costs every
+        # first run its compile, docs/performance.md.)
+        cap = obs.tpts.shape[0]
+        since = st[S_DISK1_REST_SINCE]
+        if _at_rest(stop, y) and not since > obs.tpts[(c - 2) % cap]:  # (NaN: moving)
+            return False
+        # The points to record after convergence must fit before t_end at the pace of the
+        # last period; else the run goes on unconverged and is judged at t_end from all
+        # its points, as a fixed window is (Fig. 14 at eta = 5.45 converged at t = 4911
+        # of 5000 and came back with no period).
+        target = min(obs.pts.shape[0], max(stop.min_points, 4 * per))
+        pace = (obs.tpts[(c - 1) % cap] - obs.tpts[(c - 1 - per) % cap]) / per
+        if t + (target + 1) * pace <= st[S_T_END]:
             st[S_PHASE] = 1.0
             st[S_T_CONVERGED] = t
             st[S_PERIOD] = per
