@@ -476,7 +476,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     if per > 0:  # (then the ring holds at least 9 points)
                         target = min(cap, max(MIN_POINTS, 4 * per))
                         # not the round-off flicker of dx1 at rest (disk 1 at rest since the
-                        # previous crossing, as stoprules.converged_now; NaN: not at rest), and
+                        # previous crossing, as stoprules.converged_now), and
                         # time left to record the points (ditto)
                         flicker = at_rest and not d1_rest_since > tpts[(n_cross - 2) % cap]
                         last = tpts[(n_cross - 1) % cap]

@@ -237,7 +237,7 @@ def converged_now(stop, obs, t, y) -> bool:
         # first run its compile, docs/performance.md.)
         cap = obs.tpts.shape[0]
         since = st[S_DISK1_REST_SINCE]
-        if _at_rest(stop, y) and not since > obs.tpts[(c - 2) % cap]:  # (NaN: moving)
+        if _at_rest(stop, y) and not since > obs.tpts[(c - 2) % cap]:  # (since is set then)
             return False
         # The points to record after convergence must fit before t_end at the pace of the
         # last period; else the run goes on unconverged and is judged at t_end from all
