@@ -8,8 +8,9 @@ Issue 30, item 2. Everything side by side in one run, one machine:
    rtol of the ladder (atol = 0.01 rtol) whose points all lie within 1e-6 (and 1e-8) of
    the reference; then the chosen runs are timed in alternating rounds, best of the
    rounds, one core, each after an untimed run of the same solver (as in
-   :mod:`benchmarks.peer_precision`). Solvers: the engine's ``rodas5p``, ``dopri5`` and ``auto``, and
-   numbalsoda's compiled LSODA (SciPy's LSODA if numbalsoda does not import, said so).
+   :mod:`benchmarks.peer_precision`). Solvers: the engine's ``rodas5p``, ``dopri5``
+   and ``auto``, and numbalsoda's compiled LSODA (SciPy's LSODA if numbalsoda does not
+   import, said so).
 2. **Diagrams**: the Fig. 6 (constant belt) and Fig. 12 (DC motor) sweeps over eta
    (``--values`` values in [1, 10], t_end 3000, t_transient 2000, all cores) with
    ``rodas5p`` and ``auto`` at the same rtol, alternating, best of ``--rounds``. Matched
