@@ -56,10 +56,12 @@ _DRIVER_FLOOR = textwrap.dedent(
     import numpy as np
     from numba import njit
     import stickslip_fast as ssf
-    from stickslip_fast.base.jit import JIT
+    from stickslip_fast.base import jit
     from stickslip_fast.core import trajectory as tr
 
-    @njit(**dict(JIT, cache=False))  # code from -c has no file to cache against
+    # Python calls setup: the options with Numba's wrappers (ENTRY; JIT before it existed);
+    # code from -c has no file to cache against
+    @njit(**dict(getattr(jit, "ENTRY", jit.JIT), cache=False))
     def setup(method, n, n_osc, dc, variant, rs, pts, tpts, samples):
         obs = tr._make_observer(rs, pts, tpts, samples, 1.0, n)
         rec = tr.method_record(method, variant)

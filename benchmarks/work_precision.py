@@ -143,8 +143,11 @@ def scipy_problem(system, rhs_kind="compiled"):
             lambda t, y: scipy_model.rhs(t, y, params),
             lambda t, y: scipy_model.jac(t, y, params),
         )
+    from stickslip_fast.base import jit
     from stickslip_fast.model.equations import dense_jacobian, rhs
 
+    # the twin with Numba's wrapper, called directly (base.jit), where this version has it
+    rhs = getattr(jit, "python_callable", lambda f: f)(rhs)
     p = system.to_array()
     n_osc = system.n_oscillators
     dc = system.is_dc_motor

@@ -25,10 +25,9 @@ from collections import namedtuple
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from ..base.interrupt import call_interruptible, new_abort_flag
-from ..base.jit import JIT, is_record, overload_call
+from ..base.jit import ENTRY, JIT, is_record, njit, overload_call
 from ..base.messages import plain
 from ..base.status import ST_ERROR, STATUS_NAMES
 from ..core.driver import (
@@ -145,7 +144,7 @@ def _lyap_stop(stop, obs, t, y):
         return lambda stop, obs, t, y: False
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def lyapunov_kernel(
     y0: np.ndarray,
     u0: np.ndarray,

@@ -37,7 +37,6 @@ from ..core.trajectory import (
     N_STAT_I,
     integrate,
     method_variant,
-    unroll_ring,
 )
 from ..model.system import System, warn_if_synchronous
 
@@ -235,11 +234,12 @@ def _run_kernel(
 
 def _ring_points(b: _RunBuffers, n_cross: int, max_points: int) -> tuple:
     """(times, states) of the last ``max_points`` recorded crossings, in time order."""
-    k = min(n_cross, max_points)
-    pts = np.empty((k, b.ring.shape[1]))
-    tp = np.empty(k)
-    unroll_ring(b.ring, b.tring, n_cross, pts, tp)
-    return tp, pts
+    # trajectory.unroll_ring in NumPy: Python calling the compiled one would compile
+    # its entry twin in every first run (base.jit)
+    cap = b.ring.shape[0]
+    k = min(n_cross, max_points, cap)
+    slots = (n_cross - k + np.arange(k)) % cap
+    return b.tring[slots], b.ring[slots]
 
 
 def recorded_crossings(

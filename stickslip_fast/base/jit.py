@@ -2,21 +2,51 @@
 
 ``error_model="numpy"`` makes a division by zero give inf/NaN instead of
 raising: no kernel can raise (see docs/developing.md, "The kernel rules").
+
+Two option sets: :data:`JIT` for the functions that compiled code calls, built
+without Numba's CPython and C wrappers, and :data:`ENTRY` for the functions
+Python calls alone. Compile them with this module's :func:`njit`: a Python call of
+a :data:`JIT` function then goes to its entry twin, where Numba's own ``njit``
+would crash the interpreter.
 """
 
 from __future__ import annotations
 
 import functools
 import inspect
+import types as pytypes
 
-from numba import njit, types
+from numba import njit as _numba_njit
+from numba import types
 from numba.core import cgutils, ir_utils
+from numba.core.caching import NullCache
+from numba.core.registry import CPUDispatcher
 from numba.extending import intrinsic, overload
 
-__all__ = ["JIT", "OVERLOAD", "overload_call", "is_record", "borrow", "poll_flag"]
+__all__ = [
+    "JIT",
+    "ENTRY",
+    "njit",
+    "python_callable",
+    "OVERLOAD",
+    "overload_call",
+    "is_record",
+    "borrow",
+    "poll_flag",
+]
 
-#: Options of every ``@njit`` of the package.
-JIT = dict(cache=True, nogil=True, error_model="numpy")
+#: Options of every ``@njit`` of the package that compiled code calls. Numba builds
+#: no CPython wrapper (the code that unboxes Python arguments: for a record, every
+#: field) and no C wrapper for them. Only a call from Python needs those, but every
+#: caller links them in and LLVM optimised them again at each level: about a sixth
+#: of a first ``simulate``'s compile (docs/performance.md, "The first run").
+JIT = dict(
+    cache=True, nogil=True, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True
+)
+#: Options of the compiled functions that Python calls and compiled code does not
+#: (``integrate``, ``run_lane``, the variational and Lyapunov kernels, ...):
+#: :data:`JIT` with Numba's wrappers.
+ENTRY = dict(JIT, no_cpython_wrapper=False, no_cfunc_wrapper=False)
 #: Options of the small ``@overload`` implementations (the problem's right-hand
 #: side, Jacobian, factorisation, solve, norms). Inlined into the caller at
 #: Numba IR level: records (namedtuples of arrays) passed across a call boundary
@@ -25,6 +55,72 @@ JIT = dict(cache=True, nogil=True, error_model="numpy")
 #: reference counts are pruned and the step costs what it did. The large ones
 #: use :func:`overload_call` instead.
 OVERLOAD = dict(jit_options=JIT, inline="always")
+
+
+class CompiledOnlyDispatcher(CPUDispatcher):
+    """Numba's dispatcher for a function compiled without its CPython wrapper.
+
+    Compiled callers call the native function and never go through
+    ``__call__``. Numba would call the missing wrapper's null address from
+    Python and crash the interpreter; here a Python call goes to an entry twin
+    instead: the same function compiled with the wrappers (:data:`ENTRY`),
+    built at the first such call. The twin has its own name in Numba's cache
+    (``<name>__entry``): the cache index does not know the options.
+    """
+
+    def __call__(self, *args, **kwargs):
+        return self.entry_twin()(*args, **kwargs)
+
+    def entry_twin(self) -> CPUDispatcher:
+        """The twin that Python calls go to (built at the first call)."""
+        twin = self.__dict__.get("_entry_twin")
+        if twin is None:
+            func = self.py_func
+            copy = pytypes.FunctionType(
+                func.__code__, func.__globals__, func.__name__, func.__defaults__,
+                func.__closure__,
+            )  # fmt: skip
+            copy.__kwdefaults__ = func.__kwdefaults__
+            copy.__module__ = func.__module__
+            copy.__qualname__ = f"{func.__qualname__}__entry"
+            copy.__doc__ = func.__doc__
+            options = self.__dict__.get("_entry_options")
+            if options is None:  # rebuilt by pickle, without its decorator: from the target
+                options = {k: v for k, v in self.targetoptions.items() if k != "nopython"}
+                options.update(cache=not isinstance(self._cache, NullCache))
+                options.update(no_cpython_wrapper=False, no_cfunc_wrapper=False)
+            twin = _numba_njit(**options)(copy)
+            self.__dict__["_entry_twin"] = twin
+        return twin
+
+
+def python_callable(dispatcher):
+    """The dispatcher to call from Python in a loop: a compiled-only one's entry twin.
+
+    Skips the forwarding call of :meth:`CompiledOnlyDispatcher.__call__` (for peers
+    that call the model's right-hand side from Python at every evaluation).
+    """
+    if isinstance(dispatcher, CompiledOnlyDispatcher):
+        return dispatcher.entry_twin()
+    return dispatcher
+
+
+def njit(*args, **options):
+    """:func:`numba.njit`; without the CPython wrapper, Python calls go to an entry twin.
+
+    With ``no_cpython_wrapper=True`` (as in :data:`JIT`) the dispatcher is a
+    :class:`CompiledOnlyDispatcher`; otherwise this is :func:`numba.njit` itself.
+    """
+    if not options.get("no_cpython_wrapper"):
+        return _numba_njit(*args, **options)
+
+    def decorate(func):
+        dispatcher = _numba_njit(**options)(func)
+        dispatcher.__class__ = CompiledOnlyDispatcher  # same layout: a subclass, no slots
+        dispatcher._entry_options = dict(options, no_cpython_wrapper=False, no_cfunc_wrapper=False)
+        return dispatcher
+
+    return decorate(args[0]) if args else decorate
 
 
 def is_record(typ, cls) -> bool:

@@ -41,10 +41,9 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record, overload_call
+from ..base.jit import JIT, OVERLOAD, is_record, njit, overload_call
 from .problems import problem_f
 from .steppers import (
     DENSE_HERMITE,

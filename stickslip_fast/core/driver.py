@@ -32,9 +32,8 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from ..base.jit import JIT, borrow, is_record, overload_call, poll_flag
+from ..base.jit import JIT, borrow, is_record, njit, overload_call, poll_flag
 from ..base.status import (
     ST_INTERRUPTED,
     ST_MAX_STEPS,

@@ -13,9 +13,9 @@ before the end.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from ..base.jit import JIT as _JIT
+from ..base.jit import njit
 from ..base.status import (  # noqa: F401  (re-exported: the codes used to live here)
     ORBIT_STATUSES,
     ST_EQUILIBRIUM,

@@ -64,10 +64,10 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.jit import JIT, OVERLOAD, is_record, njit
 from ..model.equations import (
     jacobian_blocks,
     rhs,

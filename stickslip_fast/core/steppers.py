@@ -35,10 +35,9 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record, overload_call
+from ..base.jit import JIT, OVERLOAD, is_record, njit, overload_call
 from .problems import (
     error_norm,
     initial_step,

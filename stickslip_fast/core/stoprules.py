@@ -14,9 +14,8 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
-from ..base.jit import JIT
+from ..base.jit import JIT, njit
 from .poincare import ring_period
 
 __all__ = [

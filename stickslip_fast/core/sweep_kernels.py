@@ -10,8 +10,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
-from numba import njit
 
+from ..base.jit import ENTRY, njit
 from ..base.status import ST_NOT_COMPUTED, ST_OK, ST_UNSETTLED
 from ..model.params import N_PARAMS
 from .poincare import detect_period
@@ -107,7 +107,7 @@ def _lane_dispatch(
     )  # fmt: skip
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def run_lane(
     method, lane, n_lanes, chain, lane_len, y0s, params, n_osc, dc, variant, rs, max_points,
     points, t_points, ints, t_conv, final_state, abort,

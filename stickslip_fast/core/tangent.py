@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from numba.extending import overload
 
+from ..base.jit import njit
 from ..model.equations import (
     jacobian_blocks,
     rhs,

@@ -28,10 +28,10 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD
+from ..base.jit import ENTRY, JIT, OVERLOAD, njit
 from ..model.linalg import dense_w_factor, dense_w_solve
 from . import problems
 from .autoswitch import AUTO_METHOD, N_AUTO_FLAGS, N_AUTO_STATS
@@ -177,7 +177,7 @@ def _solve_with(method, prob, y, ws, t_end, rtol, atol, h_fixed, max_steps, abor
     return st, istat[0], istat[1], fstat[0]
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def solve_test_problem(rosenbrock, prob, y0, t_end, rtol, atol, h_fixed, max_steps):
     """Integrate a test problem with Rodas5P (``rosenbrock``) or DOPRI5 on the driver.
 
@@ -200,7 +200,7 @@ def solve_test_problem(rosenbrock, prob, y0, t_end, rtol, atol, h_fixed, max_ste
     return y, st, ns, nr, t
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def solve_test_problem_auto(prob, y0, t_end, rtol, atol, max_steps):
     """Integrate a test problem with ``method="auto"`` (:mod:`.autoswitch`) on the driver.
 

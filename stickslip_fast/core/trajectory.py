@@ -32,10 +32,10 @@ from collections import namedtuple
 from typing import Any
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record
+from ..base.jit import ENTRY, JIT, OVERLOAD, is_record, njit
 from ..base.status import ST_ERROR, ST_OK
 from ..model.params import N_PARAMS, P_VB0
 from .autoswitch import AUTO_METHOD, N_AUTO_FLAGS, N_AUTO_STATS, AutoMethod
@@ -357,7 +357,7 @@ def _rosenbrock(method: int) -> RosenbrockMethod:
     return RODAS5P_METHOD
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def integrate(
     method: int,
     y0: np.ndarray,

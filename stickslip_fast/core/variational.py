@@ -13,9 +13,8 @@ k = 1 and a renormalising observer.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ..base.jit import JIT
+from ..base.jit import ENTRY, JIT, njit
 from ..base.status import ST_ERROR
 from ..model.params import N_PARAMS
 from .driver import (
@@ -36,7 +35,7 @@ __all__ = ["propagate_tangents", "propagate_sensitivity"]
 _JIT = JIT
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def propagate_tangents(
     y0: np.ndarray,
     U0: np.ndarray,
@@ -79,7 +78,7 @@ def propagate_tangents(
     )  # fmt: skip
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def propagate_sensitivity(
     y0: np.ndarray,
     U0: np.ndarray,

@@ -22,9 +22,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from ..base.jit import JIT
+from ..base.jit import ENTRY, JIT, njit
 from .linalg import bordered_matvec
 from .params import (
     P_BETA,
@@ -268,7 +267,7 @@ def _d2_disk(t_vv, t_vw, t_ww, m_vv, m_vw, m_ww, a1, b1, a2, b2):
     return d2t, d2m
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def second_derivative_form(
     y: np.ndarray,
     u: np.ndarray,
@@ -346,7 +345,7 @@ def second_derivative_form_at(
         out[4 * n_osc] = p[P_BETA] / n_osc * acc / p[P_TB]
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def tangent_rhs(
     y: np.ndarray,
     u: np.ndarray,
@@ -364,7 +363,7 @@ def tangent_rhs(
     jacobian_vector(y, u, p, n_osc, dc, blocks, col, row, dudt)
 
 
-@njit(**_JIT)
+@njit(**ENTRY)
 def dense_jacobian(y: np.ndarray, p: np.ndarray, n_osc: int, dc: bool) -> np.ndarray:
     """The full (n_state, n_state) Jacobian, assembled from :func:`jacobian_blocks`.
 

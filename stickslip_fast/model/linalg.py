@@ -9,9 +9,9 @@ scalar Schur complement, so factor and solve cost O(N), not O((4N+1)^3).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from ..base.jit import JIT as _JIT
+from ..base.jit import njit
 
 
 @njit(inline="always", **_JIT)

@@ -10,9 +10,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from ..base.jit import JIT
+from ..base.jit import JIT, njit
 
 __all__ = ["ETA_MIN", "ETA_MAX", "N_PARAMS", "PARAM_INDEX", "eta_prime"]
 
