@@ -332,6 +332,15 @@ def _factor_into(w_factor_fn):
 #: linear algebra), ``factor_w_inline`` the same with it inlined (small records).
 factor_w = njit(inline="always", **_JIT)(_factor_into(w_factor))
 factor_w_inline = njit(inline="always", **_JIT)(_factor_into(w_factor_inline))
+#: The blocks' LU and solve of a small record without a DC motor (W has no border),
+#: compiled once and inlined by LLVM (``forceinline``), not at the Numba IR level: a
+#: Rodas5P step solves eight times, and Numba typed and lowered eight IR copies of
+#: the solve in the step, and each again in the overload's typing-only compile (a
+#: first ``simulate``: the step 0.85 s instead of 1.6-2.0 s, exclusive; docs/
+#: performance.md, "The first run"). LLVM inlines it with the same constant N, and
+#: warm runs measured the same.
+_blocks_factor_call = njit(forceinline=True, **_JIT)(blocks_factor.py_func)
+_blocks_solve_call = njit(forceinline=True, **_JIT)(blocks_solve.py_func)
 
 
 @overload(problem_f, **_OVL)
@@ -362,7 +371,9 @@ def _model_factor(prob, lin, sigma):
         n_osc, dc = _small_dims(prob)
         if not dc:
             # the blocks alone: W has no border
-            return lambda prob, lin, sigma: blocks_factor(sigma, lin.blocks, n_osc, lin.lu, lin.piv)
+            return lambda prob, lin, sigma: _blocks_factor_call(
+                sigma, lin.blocks, n_osc, lin.lu, lin.piv
+            )
         return lambda prob, lin, sigma: factor_w_inline(lin, sigma, n_osc, dc)
     if _is(prob, StickSlip):
         return lambda prob, lin, sigma: factor_w(lin, sigma, prob.n_osc, prob.dc)
@@ -373,7 +384,7 @@ def _model_solve(prob, lin, b):
     if _is(prob, StickSlipSmall):
         n_osc, dc = _small_dims(prob)
         if not dc:
-            return lambda prob, lin, b: blocks_solve(lin.lu, lin.piv, b, n_osc)
+            return lambda prob, lin, b: _blocks_solve_call(lin.lu, lin.piv, b, n_osc)
         return lambda prob, lin, b: w_solve_inline(
             lin.lu, lin.piv, lin.z, lin.row, lin.scal[1], n_osc, dc, b
         )
