@@ -53,18 +53,15 @@ def test_a_jit_function_has_no_wrapper_and_python_calls_reach_its_entry_twin():
     assert inner(c=12.0, b=4.0, a=3.0) == 13.0
 
 
-def test_a_rebuilt_dispatcher_derives_its_twin_from_its_target_options():
-    # Numba rebuilds an unpickled dispatcher from its function and target options,
-    # without the decorator (a new process, a Dask worker)
-    inner = njit(**dict(JIT, cache=False))(_hypot3)
-    del inner.__dict__["_entry_options"]
-    assert inner(3.0, 4.0, 12.0) == 13.0
-    twin = inner.entry_twin()
-    assert twin.targetoptions["no_cpython_wrapper"] is False
-    assert twin.targetoptions["error_model"] == "numpy"
+def test_the_twin_takes_the_dispatchers_options_and_caching():
+    # from the dispatcher itself (so also after pickle rebuilt it without its decorator)
+    plain = njit(**dict(JIT, cache=False, inline="always"))(_hypot3)
+    twin = plain.entry_twin()
+    assert twin.targetoptions["inline"] == "always" and twin.targetoptions["nogil"]
+    assert type(twin._cache).__name__ == "NullCache"
     cached = njit(**JIT)(poincare.ring_period.py_func)
-    del cached.__dict__["_entry_options"]
-    assert not isinstance(cached.entry_twin()._cache, type(inner.entry_twin()._cache))
+    assert type(cached.entry_twin()._cache).__name__ == "FunctionCache"
+    assert cached.entry_twin() is cached.entry_twin()  # built once
 
 
 def test_options_and_the_package_functions_python_calls():

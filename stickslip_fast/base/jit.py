@@ -84,11 +84,10 @@ class CompiledOnlyDispatcher(CPUDispatcher):
             copy.__module__ = func.__module__
             copy.__qualname__ = f"{func.__qualname__}__entry"
             copy.__doc__ = func.__doc__
-            options = self.__dict__.get("_entry_options")
-            if options is None:  # rebuilt by pickle, without its decorator: from the target
-                options = {k: v for k, v in self.targetoptions.items() if k != "nopython"}
-                options.update(cache=not isinstance(self._cache, NullCache))
-                options.update(no_cpython_wrapper=False, no_cfunc_wrapper=False)
+            # the dispatcher's own options (also after pickle rebuilt it), with the wrappers
+            options = {k: v for k, v in self.targetoptions.items() if k != "nopython"}
+            options.update(cache=not isinstance(self._cache, NullCache))
+            options.update(no_cpython_wrapper=False, no_cfunc_wrapper=False)
             twin = _numba_njit(**options)(copy)
             self.__dict__["_entry_twin"] = twin
         return twin
@@ -117,7 +116,6 @@ def njit(*args, **options):
     def decorate(func):
         dispatcher = _numba_njit(**options)(func)
         dispatcher.__class__ = CompiledOnlyDispatcher  # same layout: a subclass, no slots
-        dispatcher._entry_options = dict(options, no_cpython_wrapper=False, no_cfunc_wrapper=False)
         return dispatcher
 
     return decorate(args[0]) if args else decorate
