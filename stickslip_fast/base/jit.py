@@ -29,6 +29,7 @@ __all__ = [
     "njit",
     "python_callable",
     "OVERLOAD",
+    "LLVM_INLINED",
     "overload_call",
     "is_record",
     "borrow",
@@ -55,6 +56,12 @@ ENTRY = dict(JIT, no_cpython_wrapper=False, no_cfunc_wrapper=False)
 #: reference counts are pruned and the step costs what it did. The large ones
 #: use :func:`overload_call` instead.
 OVERLOAD = dict(jit_options=JIT, inline="always")
+#: Options of a function compiled once and inlined by LLVM into each caller
+#: (``forceinline``: LLVM's ``alwaysinline``), as :func:`overload_call`'s are. Not
+#: cached on its own: its callers are cached with its code linked in, and Numba's
+#: cache index names a function by its source, so a cached copy of another
+#: function's ``py_func`` would share that function's entries whatever the options.
+LLVM_INLINED = dict(JIT, cache=False, forceinline=True)
 
 
 class CompiledOnlyDispatcher(CPUDispatcher):
@@ -263,10 +270,8 @@ def overload_call(func):
                 return None
             return _borrowing_call(func.__name__, impl, args)
 
-        # cache=False: the generated function has no source file; the compiled
-        # kernels that call it are cached with its code linked in.
-        options = dict(JIT, cache=False, forceinline=True)
-        overload(func, jit_options=options, inline="never")(typed)
+        # uncached (LLVM_INLINED): the generated function has no source file either
+        overload(func, jit_options=LLVM_INLINED, inline="never")(typed)
         return generator
 
     return decorate

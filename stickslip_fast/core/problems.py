@@ -67,7 +67,7 @@ import numpy as np
 from numba import types
 from numba.extending import overload
 
-from ..base.jit import JIT, OVERLOAD, is_record, njit
+from ..base.jit import JIT, LLVM_INLINED, OVERLOAD, is_record, njit
 from ..model.equations import (
     jacobian_blocks,
     rhs,
@@ -340,12 +340,9 @@ factor_w_inline = njit(inline="always", **_JIT)(_factor_into(w_factor_inline))
 #: performance.md, "The first run"). LLVM inlines it with the same constant N; warm,
 #: method="auto" measured 10-17 % faster and Rodas5P at eta = 2.0 ~2 % slower, with
 #: bit-identical results. (The DC-motor path's W, treated so, was slower: not kept.)
-#: Not cached on its own (its callers are, with its code linked in): Numba's cache
-#: index names a function by its source, so a cached copy would share its entries
-#: with ``blocks_factor`` and the options would not count.
-_CALLED = dict(_JIT, cache=False, forceinline=True)
-_blocks_factor_call = njit(**_CALLED)(blocks_factor.py_func)
-_blocks_solve_call = njit(**_CALLED)(blocks_solve.py_func)
+#: Uncached (LLVM_INLINED): a cached copy would share ``blocks_factor``'s cache entries.
+_blocks_factor_call = njit(**LLVM_INLINED)(blocks_factor.py_func)
+_blocks_solve_call = njit(**LLVM_INLINED)(blocks_solve.py_func)
 
 
 @overload(problem_f, **_OVL)
