@@ -10,6 +10,7 @@ repeat).
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 
@@ -21,7 +22,7 @@ from hypothesis import strategies as st
 
 import stickslip_fast as ssf
 from stickslip_fast.base.status import STATUS_NAMES
-from stickslip_fast.core.poincare import classify
+from stickslip_fast.core.poincare import classify, still_settling
 
 ASYM = ssf.System.preset("asymmetric")
 SLIDING_ETAS = (1.0, 3.2, 4.0)
@@ -61,6 +62,17 @@ def test_classify_reads_only_the_tail():
     assert label(300.0, 300.0, 1.0, dc=True, vb_end=0.006) == "equilibrium"
     # a recording window shorter than dwell: the whole window is the tail
     assert STATUS_NAMES[classify(50.0, 50.0, 50.0, 1.0, False, 0.0, 0.5)] == "equilibrium"
+
+
+def test_still_settling_is_exactly_where_classify_says_unsettled():
+    # the test that makes a run look past its window's end (stoprules.past_end) and
+    # the label it avoids must not drift apart
+    times = (-1.0, 0.0, 49.9, 50.0, 199.9, 200.0, 250.0)
+    for rest, disk1, tail in itertools.product(times, times, (0.0, 50.0, 200.0)):
+        if rest >= 0.0 and disk1 < 0.0:
+            continue  # at rest implies disk 1 at rest
+        unsettled = STATUS_NAMES[classify(rest, disk1, tail, 1.0, False, 0.0, 0.5)] == "unsettled"
+        assert still_settling(rest, disk1, tail) == unsettled, (rest, disk1, tail)
 
 
 # --------------------------------------------------------- regression cases
@@ -105,19 +117,23 @@ def test_census_default_stop_is_converged():
     assert res.settings["stop"] == "converged"
 
 
-def test_a_run_that_comes_to_rest_late_is_unsettled_never_an_orbit():
+def test_a_run_that_comes_to_rest_late_is_looked_at_past_its_window():
     system = ASYM.replace(eta=3.2)
     full = ssf.simulate(system, t_end=3000)
     came_to_rest = full.t_final - full.rest_time
     assert 0 < came_to_rest < 2800
-    late = ssf.simulate(system, t_end=came_to_rest + 50.0)
-    assert late.status == "unsettled"
-    assert 0 <= late.rest_time <= 50.0 + 1e-9
+    # At t_end it has rested 50 < dwell = 200 time units: too early to tell. It goes on
+    # until it has rested dwell (at most dwell past t_end), and is an equilibrium.
+    t_end = came_to_rest + 50.0
+    late = ssf.simulate(system, t_end=t_end)
+    assert late.status == "equilibrium"
+    assert t_end < late.t_final <= t_end + 200.0
+    assert 200.0 <= late.rest_time < 200.0 + (late.t_final - t_end)
+    assert late.t_final - late.rest_time == pytest.approx(came_to_rest, abs=1e-9)
     assert late.period == 0 and len(late.poincare) == 0
-    # the same run, given enough time, is an equilibrium
-    assert ssf.simulate(system, t_end=came_to_rest + 250.0).status == "equilibrium"
-    # and a dwell shorter than the rest seen is enough
-    assert ssf.simulate(system, t_end=came_to_rest + 50.0, dwell=40.0).status == "equilibrium"
+    # a dwell shorter than the rest seen at t_end: an equilibrium at t_end
+    short = ssf.simulate(system, t_end=t_end, dwell=40.0)
+    assert short.status == "equilibrium" and short.t_final == t_end
 
 
 def test_crossings_of_the_transient_do_not_make_an_orbit():
@@ -199,6 +215,32 @@ def test_converged_stopping_takes_the_small_orbit_whose_minima_look_at_rest(d_et
     assert conv.t_converged < 100.0 and conv.t_final < 200.0
     assert conv.rest_time < 0  # it ended where disk 1 moves
     np.testing.assert_allclose(conv.poincare[-1], ref.poincare[-1], atol=1e-8)
+
+
+#: Times inside two dips of SMALL_ORBIT's speeds (all below equilibrium_tol for ~0.015
+#: time units), at a minimum and at a maximum of x1: found on samples every 0.005 of the
+#: run below (t_transient 100, t_end 400).
+DIP_TIMES = (392.6675, 395.8125)
+
+
+@pytest.mark.parametrize("t_dip", DIP_TIMES)
+def test_a_fixed_window_that_ends_in_a_dip_looks_past_its_end(t_dip):
+    # The window used to end in the dip and see a run that had just come to rest:
+    # "unsettled". Now the run goes on until disk 1 moves again, and is the orbit.
+    system = ASYM.replace(**SMALL_ORBIT)
+    kw = dict(t_transient=100.0, max_points=64)
+    ref = ssf.simulate(system, t_end=400.0, sample_dt=0.005, **kw)
+    assert ref.status == "ok" and ref.period == 1
+    k = np.argmin(np.abs(ref.t - t_dip))  # the premise: t_dip is in a dip
+    assert np.abs(ref.y[k - 1 : k + 2, [1, 3]]).max() <= ref.settings["equilibrium_tol"]
+    run = ssf.simulate(system, t_end=t_dip, **kw)
+    assert (run.status, run.period) == ("ok", 1)
+    assert t_dip < run.t_final < t_dip + 1.0 and run.rest_time < 0  # disk 1 moves
+    last = np.argmin(np.abs(ref.t_poincare - run.t_poincare[-1]))
+    np.testing.assert_allclose(run.t_poincare[-1], ref.t_poincare[last], rtol=1e-12)
+    np.testing.assert_allclose(run.poincare[-1], ref.poincare[last], atol=1e-9)
+    swept = ssf.sweep(system, "eta", [system.eta], t_end=t_dip, progress=False, **kw)
+    assert (swept.status[0], swept.period[0]) == ("ok", 1)
 
 
 def test_converged_stopping_never_calls_a_slowly_decaying_oscillation_an_orbit():

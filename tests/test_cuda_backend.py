@@ -159,6 +159,24 @@ def test_converged_stopping_near_the_hopf_point_matches_cpu():
     np.testing.assert_allclose(gpu["t_converged"], cpu["t_converged"], rtol=1e-4)
 
 
+def test_a_window_that_ends_while_settling_looks_past_its_end_as_on_the_cpu():
+    # tests/test_classification.py: a fixed window that ends in a dip of a small orbit's
+    # speeds (at t = 141.215-141.225; the code before said "unsettled"), and one that ends
+    # 50 time units after the run came to rest. The kernel's copy of stoprules.past_end
+    # goes on until disk 1 moves (the orbit) or the rest has lasted dwell (the
+    # equilibrium), as the CPU does.
+    small = ASYM.replace(eta=1.0360360360360461, k12=0.018918918918918948)
+    for system, kw, expected in (
+        (small, dict(t_end=141.22, t_transient=50.0), ("ok", 1)),
+        (ASYM.replace(eta=3.2), dict(t_end=157.48864927201203), ("equilibrium", 0)),
+    ):
+        kw.update(max_points=16, progress=False)
+        gpu = sweep(system, "eta", [system.eta], backend="cuda", **kw)
+        cpu = sweep(system, "eta", [system.eta], backend="local", **kw)
+        _agree(gpu, cpu)
+        assert (cpu.status[0], cpu.period[0]) == expected
+
+
 def test_census_on_the_gpu_matches_cpu(tmp_path):
     # one start per (value, start): continuation units of one-value chains on the device
     kw = dict(n_starts=3, seed=1, t_end=200.0, max_points=16, stop="converged",

@@ -76,7 +76,7 @@ def test_trajectory_roundtrip_and_xarray(tmp_path):
 
 def test_trajectory_without_samples_and_stalled(tmp_path):
     sym = ssf.System.preset("symmetric", drive="dc-motor", eta=9.99)
-    # the motor comes to rest at t = 167.7: with t_end = 300 that is "unsettled"
+    # the motor comes to rest at t = 167.7: with t_end = 600 it has rested dwell by t_end
     res = ssf.simulate(sym, 600.0, 300.0)
     assert res.status == "stalled"
     back = read_trajectory(write_trajectory(tmp_path / "s.h5", res))

@@ -83,9 +83,12 @@ CLASSIFY_PARAMS_DOC = """
         The run counts as at rest ("equilibrium", or "stalled" when a DC motor's
         belt is below 1% of v_b0) when, over its last ``dwell`` time units (or
         the whole recording window if that is shorter), no disk velocity
-        exceeds this and the belt speed varies by less. A run at rest at its
-        end for less than that is "unsettled" (never an orbit: its crossings
-        would be round-off minima of x1 at rest). Motion that died out earlier
+        exceeds this and the belt speed varies by less. A run at rest (or with
+        disk 1 at rest) at ``t_end`` for less than that goes on, for at most
+        ``dwell``, until disk 1 moves or the rest has lasted that long (so
+        ``t_final`` may exceed ``t_end``); one still at rest for less is
+        "unsettled" (never an orbit: its crossings would be round-off minima of
+        x1 at rest). Motion that died out earlier
         never counts. Default 1e-4, ten times the presets' eps: inside the
         friction law's stick band a "stuck" disk creeps at O(eps).
     period_tol : float, optional

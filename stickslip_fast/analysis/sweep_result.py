@@ -107,9 +107,9 @@ def warn_no_orbit(result: SweepResult, names, axes, branches) -> None:
     hint = ""
     if "unsettled" in counts:
         hint = (
-            " 'unsettled' runs were at rest at t_end for less than `dwell`, too late to"
-            " tell (they came to rest, or t_end fell where all speeds of a small orbit"
-            " dip below equilibrium_tol): run longer, or use stop='converged'."
+            " 'unsettled' runs were at rest for less than `dwell` even `dwell` past"
+            " t_end, too late to tell (their rest restarted, e.g. a DC belt still"
+            " drifting): run longer, or use stop='converged'."
         )
     warnings.warn(
         f"{int(bad.sum())} of {status.size} values gave no orbit: {detail}{example}. "

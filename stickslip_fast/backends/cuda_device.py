@@ -26,6 +26,7 @@ from ..base.status import STATUS_NAMES
 from ..core import poincare
 from ..model import equations as model
 from ..model import linalg
+from ..model.params import P_VB0
 
 # numba-cuda <= 0.30.4 registers an overload for np.row_stack when it compiles
 # its first kernel, and NumPy 2.5 removed that alias: the compile then fails with
@@ -128,6 +129,9 @@ detect_period = _device_callable(poincare.detect_period)
 
 
 ring_period = _device_callable(poincare.ring_period)
+
+
+still_settling = _device_callable(poincare.still_settling)
 
 
 # the bordered O(N) factorisation and solve of W = sigma I - J
@@ -279,3 +283,23 @@ def _disks_at_rest(y, n_osc, tol):
         if not (abs(y[4 * i + 1]) <= tol and abs(y[4 * i + 3]) <= tol):
             return False
     return True
+
+
+@cuda.jit(device=True)
+def _settling(t, rest_since, d1_rest_since, dwell, t_rec):
+    """``poincare.still_settling`` at ``t`` of a run whose rest is tracked as ``stoprules``
+    tracks it (NaN: moving), recording from ``t_rec``: ``stoprules.past_end``'s test."""
+    rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
+    d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
+    return still_settling(rest_time, d1_rest, min(dwell, t - t_rec))
+
+
+@cuda.jit(device=True)
+def _classify_end(t, rest_since, d1_rest_since, last_cross, dwell, t_rec, y, dc, p):
+    """The status of a run that ended at ``t`` in state ``y`` with parameters ``p``, as
+    ``trajectory._run`` classifies it."""
+    rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
+    d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
+    since = math.inf if math.isnan(last_cross) else t - last_cross
+    vb_end = y[y.shape[0] - 1] if dc else 0.0
+    return classify(rest_time, d1_rest, min(dwell, t - t_rec), since, dc, vb_end, p[P_VB0])

@@ -47,23 +47,23 @@ import numpy as np
 from ..core.steppers import PI_ALPHA, PI_BETA, STEP_FAC_MAX, STEP_FAC_MIN, STEP_SAFETY
 from ..core.tableaus import RODAS5P
 from ..core.trajectory import CONVERGED_MIN_POINTS, CONVERGED_MIN_REPEATS
-from ..model.params import P_VB0
 from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
     _ST_ERROR,
     _ST_MAX_STEPS,
     _ST_NONFINITE,
     _ST_OK,
     _ST_UNDERFLOW,
+    _classify_end,
     _dense_value,
     _disks_at_rest,
     _error_norm,
     _initial_step,
     _locate_upcrossing,
     _nan_rows,
+    _settling,
     _time_order,
     _write_counts,
     check_available,
-    classify,
     cuda,
     detect_period,
     float64,
@@ -91,8 +91,6 @@ _B = np.ascontiguousarray(RODAS5P.b, dtype=np.float64)
 _E = np.ascontiguousarray(RODAS5P.b_err, dtype=np.float64)
 _H = np.ascontiguousarray(RODAS5P.H, dtype=np.float64)
 _Q = RODAS5P.embedded_order + 1.0
-_STAGES = int(_B.size)
-_NDENSE = int(_H.shape[0])
 # PI step-size controller: the CPU kernel's constants
 _SAFETY, _FAC_MIN, _FAC_MAX = STEP_SAFETY, STEP_FAC_MIN, STEP_FAC_MAX
 _PI_ALPHA, _PI_BETA = PI_ALPHA, PI_BETA
@@ -145,8 +143,8 @@ def get_kernel(n_osc: int, dc: bool, max_registers: int | None = None):
 
 def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noqa: N803
     NS = 4 * N_OSC + (1 if DC else 0)
-    NST = _STAGES
-    NDN = _NDENSE
+    NST = int(_B.size)
+    NDN = int(_H.shape[0])
     MIN_REPEATS = CONVERGED_MIN_REPEATS
     MIN_POINTS = CONVERGED_MIN_POINTS
     jit = cuda.jit if max_registers is None else cuda.jit(max_registers=max_registers)
@@ -198,6 +196,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
         n_cross = 0
         status = _ST_OK
         t = 0.0
+        t_stop = 0.0
         h = 0.0
         adaptive = True
         err_prev = 1.0
@@ -216,14 +215,10 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     # ---- classification, as trajectory._run / _lane_values
                     for i in range(NS):
                         final_state[v, i] = y[i]
-                    if status == _ST_OK:
-                        vb_end = y[NS - 1] if DC else 0.0
-                        rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
-                        # the host passes t_transient = 0 if converged
-                        tail = min(dwell, t - t_transient)
-                        d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
-                        since = math.inf if math.isnan(last_cross) else t - last_cross
-                        status = classify(rest_time, d1_rest, tail, since, DC, vb_end, p[P_VB0])
+                    if status == _ST_OK:  # (the host passes t_transient = 0 if converged)
+                        status = _classify_end(
+                            t, rest_since, d1_rest_since, last_cross, dwell, t_transient, y, DC, p
+                        )
                     count = 0
                     period = 0
                     if status == _ST_OK:
@@ -274,6 +269,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 n_cross = 0
                 status = _ST_OK
                 t = 0.0
+                t_stop = t_end  # moved by a look past the end, as stoprules.past_end
 
                 rhs(y, p, N_OSC, DC, f0)
                 if t_transient <= 0.0:
@@ -316,8 +312,8 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     status = _ST_MAX_STEPS
                     running = False
                     break
-                if t + h >= t_end or (adaptive and t + 1.01 * h >= t_end):
-                    h = t_end - t
+                if t + h >= t_stop or (adaptive and t + 1.01 * h >= t_stop):
+                    h = t_stop - t
                 if not jac_fresh:
                     jcorner = jacobian_blocks(y, p, N_OSC, DC, jb, jcol, jrow)
                     jac_fresh = True
@@ -453,6 +449,11 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                                 wmax[i] = y[i]
                 else:
                     rest_since = math.nan
+                if phase == 2:  # past the window's end, as stoprules.past_end
+                    if not _settling(t, rest_since, d1_rest_since, dwell, t_transient):
+                        running = False
+                        break
+                    continue
                 if not converged:
                     continue
                 # ---- converged stopping, as stoprules.converged_now
@@ -489,7 +490,10 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                             for i in range(NS):
                                 ymin[i] = y[i]
                                 ymax[i] = y[i]
-            if not t < t_end:
-                running = False
+            if running and not t < t_stop:  # the window's last step, as stoprules.past_end
+                running = phase != 2 and _settling(t, rest_since, d1_rest_since, dwell, t_transient)
+                if running:
+                    phase = 2
+                    t_stop += dwell
 
     return sweep_kernel

@@ -54,8 +54,10 @@ from .steppers import (
     stepper_step,
 )
 from .stoprules import (  # noqa: F401  (re-exported: the stop rules used to live here)
+    PHASE_PAST_END,
     S_LAST_CROSSING,
     S_N_SEEN,
+    S_PHASE,
     S_T_CONVERGED,
     S_T_END,
     STOP_AFTER_CROSSINGS,
@@ -66,6 +68,7 @@ from .stoprules import (  # noqa: F401  (re-exported: the stop rules used to liv
     converged_stop,
     disk1_rest_time,
     fixed_stop,
+    past_end,
     reset_stop,
     rest_time,
     simple_stop,
@@ -264,10 +267,17 @@ def _stop_now(stop, obs, t, y):
                 stop.state[S_N_SEEN] = obs.counts[C_CROSS]
             if stop.kind == STOP_AFTER_CROSSINGS:
                 return obs.counts[C_CROSS] >= stop.count
-            if stop.kind == STOP_CONVERGED:
-                return converged_now(stop, obs, t, y)
-            if stop.kind == STOP_AT_END and stop.n_osc > 0:
-                track_rest(stop, t, y)
+            if stop.state[S_PHASE] != PHASE_PAST_END:
+                if stop.kind == STOP_CONVERGED:
+                    if converged_now(stop, obs, t, y):
+                        return True
+                elif stop.kind == STOP_AT_END and stop.n_osc > 0:
+                    track_rest(stop, t, y)
+                if t < stop.state[S_T_END]:
+                    return False
+            # the window's last step, or past it: a run still settling goes on
+            if stop.n_osc > 0:
+                return past_end(stop, t, y, obs.t_transient)
             return False
 
         return impl
@@ -277,6 +287,9 @@ def _stop_now(stop, obs, t, y):
 @njit(**_JIT)
 def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) -> int:
     """Integrate ``y`` (in place) from t = 0 to ``t_end``; returns a status code.
+
+    (A stop rule may move the end: ``stop.state[S_T_END]``, which the driver sets to
+    ``t_end`` and reads after each step; see :func:`stoprules.past_end`.)
 
     ``method``: a method record; ``prob``/``lin``: a problem record and its linear
     workspace; ``ws``: a :class:`StepWorkspace` of the method; ``ctl``:
@@ -369,6 +382,7 @@ def drive(method, prob, lin, ws, y, t_end, ctl, obs, stop, abort, istat, fstat) 
             last_rejected = False
         if stop_now(stop, obs, t, y):
             break
+        t_end = stop.state[S_T_END]  # a stop rule may look past the end (past_end)
 
     istat[0] = n_steps
     istat[1] = n_rej

@@ -108,6 +108,19 @@ def motion_measure(ymin: np.ndarray, ymax: np.ndarray, n_osc: int, dc: bool) -> 
 
 
 @njit(**_JIT)
+def still_settling(rest_time: float, disk1_rest_time: float, tail: float) -> bool:
+    """True while a run's label cannot be told yet: :func:`classify` says "unsettled".
+
+    That is: the disks at rest (``rest_time`` >= 0), or disk 1 alone at rest while
+    another disk moves (``disk1_rest_time`` >= 0), for less than ``tail``. A run
+    that ends its window so looks past it (:func:`stoprules.look_past_end`).
+    """
+    if rest_time >= 0.0:
+        return rest_time < tail
+    return 0.0 <= disk1_rest_time < tail
+
+
+@njit(**_JIT)
 def classify(
     rest_time: float,
     disk1_rest_time: float,
@@ -133,7 +146,8 @@ def classify(
       whose belt runs at |v_b| <= STALL_FRACTION |v_b0|;
     - at rest at the end, but for less than the tail: "unsettled" (the run came
       to rest too late to tell; its crossings are round-off minima of x_1 at
-      rest, never an orbit);
+      rest, never an orbit). The stop rules first look past the end of the
+      window while :func:`still_settling` (:func:`stoprules.past_end`);
     - moving, with disk 1 at rest over the tail (disk 1 in steady sliding
       while another disk oscillates): "no-crossings": its x_1 has round-off
       minima only; with disk 1 at rest for less than the tail: "unsettled";
@@ -152,12 +166,10 @@ def classify(
         if dc and abs(vb_end) <= STALL_FRACTION * abs(vb0):
             return ST_STALLED
         return ST_EQUILIBRIUM
-    if rest_time >= 0.0:
+    if still_settling(rest_time, disk1_rest_time, tail):
         return ST_UNSETTLED
     if disk1_rest_time >= tail:
         return ST_NO_CROSSINGS
-    if disk1_rest_time >= 0.0:
-        return ST_UNSETTLED
     if not since_crossing <= tail:
         return ST_NO_CROSSINGS
     return ST_OK

@@ -16,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 
 from ..base.jit import JIT, njit
-from .poincare import ring_period
+from .poincare import ring_period, still_settling
 
 __all__ = [
     "StopRule",
@@ -26,6 +26,7 @@ __all__ = [
     "simple_stop",
     "fixed_stop",
     "converged_stop",
+    "past_end",
     "reset_stop",
     "rest_time",
     "disk1_rest_time",
@@ -65,9 +66,12 @@ S_PHASE, S_T_CONVERGED, S_REST_SINCE, S_CHECKED, S_TARGET, S_PERIOD = range(6)
 S_N_SEEN, S_LAST_CROSSING = 6, 7
 # ... and since when disk 1 (whose x1 minima are the section) has been at rest
 S_DISK1_REST_SINCE = 8
-# the run's t_end (set by the driver at its start; converged stopping reads it)
+# the run's t_end (set by the driver at its start; converged stopping reads it, and
+# a run that looks past its end moves it: the driver runs until it)
 S_T_END = 9
 STATE_SIZE = 10
+#: S_PHASE of a run that looks past the end of its window (:func:`past_end`)
+PHASE_PAST_END = 2.0
 
 
 @njit(**_JIT)
@@ -91,11 +95,12 @@ def converged_stop(
 
 
 @njit(**_JIT)
-def fixed_stop(equilibrium_tol, n_osc, dc, n) -> StopRule:
-    """A STOP_AT_END rule that watches for rest (see :func:`rest_time`)."""
+def fixed_stop(equilibrium_tol, dwell, n_osc, dc, n) -> StopRule:
+    """A STOP_AT_END rule that watches for rest (see :func:`rest_time`) and looks past
+    the end of the window while the run is settling (see :func:`past_end`)."""
     return StopRule(
-        STOP_AT_END, 0, 0.0, 0, 0, 0, equilibrium_tol, 0.0, n_osc, dc, np.empty(n), np.empty(n),
-        np.zeros(STATE_SIZE),
+        STOP_AT_END, 0, 0.0, 0, 0, 0, equilibrium_tol, dwell, n_osc, dc, np.empty(n),
+        np.empty(n), np.zeros(STATE_SIZE),
     )  # fmt: skip
 
 
@@ -255,6 +260,34 @@ def converged_now(stop, obs, t, y) -> bool:
                 obs.ymin[i] = y[i]
                 obs.ymax[i] = y[i]
     return False
+
+
+@njit(**_JIT)
+def past_end(stop, t, y, t_rec) -> bool:
+    """The rule at the last step of the window (t >= ``S_T_END``) and after it.
+
+    A window that ends while the run is settling (:func:`poincare.still_settling`:
+    at rest, or disk 1 at rest, for less than the tail of the classification) would
+    leave the run "unsettled". Near the Hopf point a small orbit's speeds all dip
+    below ``equilibrium_tol`` near each extremum of x1, and a window that ends in such
+    a dip sees a run that has just come to rest. So such a run goes on, for at most
+    ``dwell`` more time units, and ends at the first step where it is no longer
+    settling: disk 1 moves (an orbit, or steady sliding of the others), or the rest
+    has lasted the tail (an equilibrium). A run that is not settling at the end of its
+    window ends there, as before. ``t_rec`` is the start of the recording window.
+    Returns True to end the run. (Converged stopping has had its say at the window's
+    last step before this is asked.)
+    """
+    st = stop.state
+    if st[S_PHASE] == PHASE_PAST_END:
+        track_rest(stop, t, y)
+    tail = min(stop.dwell, t - t_rec)
+    settling = still_settling(rest_time(stop, t), disk1_rest_time(stop, t), tail)
+    if settling and st[S_PHASE] != PHASE_PAST_END:
+        st[S_PHASE] = PHASE_PAST_END
+        st[S_T_END] += stop.dwell
+        return False
+    return not settling
 
 
 # ------------------------------------------------------------------ section

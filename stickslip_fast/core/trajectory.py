@@ -156,7 +156,7 @@ def _stop_rule(rs, n_osc, dc, n):
             rs.period_tol, rs.max_period, CONVERGED_MIN_REPEATS, CONVERGED_MIN_POINTS,
             rs.equilibrium_tol, rs.dwell, n_osc, dc, n,
         )  # fmt: skip
-    return fixed_stop(rs.equilibrium_tol, n_osc, dc, n)
+    return fixed_stop(rs.equilibrium_tol, rs.dwell, n_osc, dc, n)
 
 
 def kernel_variant(n_osc: int, dc: bool) -> tuple:
