@@ -113,7 +113,7 @@ def still_settling(rest_time: float, disk1_rest_time: float, tail: float) -> boo
 
     That is: the disks at rest (``rest_time`` >= 0), or disk 1 alone at rest while
     another disk moves (``disk1_rest_time`` >= 0), for less than ``tail``. A run
-    that ends its window so looks past it (:func:`stoprules.look_past_end`).
+    that ends its window so looks past it (:func:`stoprules.past_end`).
     """
     if rest_time >= 0.0:
         return rest_time < tail

@@ -272,8 +272,9 @@ def past_end(stop, t, y, t_rec) -> bool:
     below ``equilibrium_tol`` near each extremum of x1, and a window that ends in such
     a dip sees a run that has just come to rest. So such a run goes on, for at most
     ``dwell`` more time units, and ends at the first step where it is no longer
-    settling: disk 1 moves (an orbit, or steady sliding of the others), or the rest
-    has lasted the tail (an equilibrium). A run that is not settling at the end of its
+    settling: disk 1 moves (its crossings then decide, as for any run), or the rest has
+    lasted the tail (an equilibrium; "no-crossings" if disk 1 alone rests). A run that
+    is not settling at the end of its
     window ends there, as before. ``t_rec`` is the start of the recording window.
     Returns True to end the run. (Converged stopping has had its say at the window's
     last step before this is asked.)
