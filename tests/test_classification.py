@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 import stickslip_fast as ssf
 from stickslip_fast.base.status import STATUS_NAMES
-from stickslip_fast.core.poincare import classify, still_settling
+from stickslip_fast.core.poincare import classify, still_settling, undecided
 
 ASYM = ssf.System.preset("asymmetric")
 SLIDING_ETAS = (1.0, 3.2, 4.0)
@@ -64,15 +64,21 @@ def test_classify_reads_only_the_tail():
     assert STATUS_NAMES[classify(50.0, 50.0, 50.0, 1.0, False, 0.0, 0.5)] == "equilibrium"
 
 
-def test_still_settling_is_exactly_where_classify_says_unsettled():
+def test_undecided_is_exactly_where_classify_says_unsettled_or_no_crossings_yet():
     # the test that makes a run look past its window's end (stoprules.past_end) and
-    # the label it avoids must not drift apart
+    # the labels it avoids must not drift apart: "unsettled", and "no-crossings" of a
+    # run whose disk 1 moves and that has crossed before the tail
     times = (-1.0, 0.0, 49.9, 50.0, 199.9, 200.0, 250.0)
+    since = (0.0, 49.9, 50.0, 199.9, 200.0, 250.0, math.inf)
     for rest, disk1, tail in itertools.product(times, times, (0.0, 50.0, 200.0)):
         if rest >= 0.0 and disk1 < 0.0:
             continue  # at rest implies disk 1 at rest
-        unsettled = STATUS_NAMES[classify(rest, disk1, tail, 1.0, False, 0.0, 0.5)] == "unsettled"
-        assert still_settling(rest, disk1, tail) == unsettled, (rest, disk1, tail)
+        for s in since:
+            label = STATUS_NAMES[classify(rest, disk1, tail, s, False, 0.0, 0.5)]
+            unsettled = label == "unsettled"
+            assert still_settling(rest, disk1, tail) == unsettled, (rest, disk1, tail)
+            waiting = unsettled or (label == "no-crossings" and disk1 < 0.0 and s < math.inf)
+            assert undecided(rest, disk1, s, tail) == waiting, (rest, disk1, s, tail)
 
 
 # --------------------------------------------------------- regression cases
@@ -241,6 +247,36 @@ def test_a_fixed_window_that_ends_in_a_dip_looks_past_its_end(t_dip):
     np.testing.assert_allclose(run.poincare[-1], ref.poincare[last], atol=1e-9)
     swept = ssf.sweep(system, "eta", [system.eta], t_end=t_dip, progress=False, **kw)
     assert (swept.status[0], swept.period[0]) == ("ok", 1)
+
+
+def test_a_window_that_ends_between_two_far_apart_crossings_looks_past_its_end():
+    # The window used to end where disk 1 moved but had not crossed for longer than the
+    # tail: "no-crossings". Now it waits, at most dwell, for the next crossing.
+    # (a) a period-1 orbit (crossings 9.64 apart) with dwell 4: the window ends 5.67
+    # after a crossing; the next comes 3.97 after t_end
+    system = ASYM.replace(eta=2.0)
+    kw = dict(t_transient=50.0, max_points=16, dwell=4.0)
+    ref = ssf.simulate(system, t_end=140.0, **kw)
+    run = ssf.simulate(system, t_end=119.0, **kw)
+    assert (ref.status, ref.period) == ("ok", 1)
+    assert (run.status, run.period) == ("ok", 1)
+    assert 119.0 < run.t_poincare[-1] <= run.t_final < 119.0 + 4.0
+    k = np.argmin(np.abs(ref.t_poincare - run.t_poincare[-1]))
+    np.testing.assert_allclose(run.poincare[-1], ref.poincare[k], atol=1e-9)
+    # (b) Fig. 2's slow period 2 at eta = 10 (the literature set, crossings 229.9 and
+    # 6.3 apart, the default dwell 200): the config's window ends in the long gap, and
+    # agrees with converged stopping now
+    from pathlib import Path
+
+    from stickslip_fast.cli.config import load_config
+
+    cfg = load_config(Path(__file__).resolve().parents[1] / "data/fig02_literature_constant.toml")
+    slow = cfg.system.replace(eta=10.0)
+    fixed = ssf.simulate(slow, **cfg.integration)
+    conv = ssf.simulate(slow, t_end=cfg.integration["t_end"], stop="converged")
+    assert np.diff(fixed.t_poincare)[-4:].max() > 200.0  # the premise: a gap over dwell
+    assert (fixed.status, fixed.period) == ("ok", 2) == (conv.status, conv.period)
+    assert cfg.integration["t_end"] < fixed.t_final < cfg.integration["t_end"] + 200.0
 
 
 def test_converged_stopping_never_calls_a_slowly_decaying_oscillation_an_orbit():

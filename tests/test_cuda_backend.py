@@ -159,16 +159,18 @@ def test_converged_stopping_near_the_hopf_point_matches_cpu():
     np.testing.assert_allclose(gpu["t_converged"], cpu["t_converged"], rtol=1e-4)
 
 
-def test_a_window_that_ends_while_settling_looks_past_its_end_as_on_the_cpu():
+def test_a_window_that_ends_undecided_looks_past_its_end_as_on_the_cpu():
     # tests/test_classification.py: a fixed window that ends in a dip of a small orbit's
-    # speeds (at t = 141.215-141.225; the code before said "unsettled"), and one that ends
-    # 50 time units after the run came to rest. The kernel's copy of stoprules.past_end
-    # goes on until disk 1 moves (the orbit) or the rest has lasted dwell (the
-    # equilibrium), as the CPU does.
+    # speeds (at t = 141.215-141.225; the code before said "unsettled"), one that ends
+    # 50 time units after the run came to rest, and one that ends 5.67 after a crossing
+    # with a dwell of 4 (before: "no-crossings"). The kernel's copy of stoprules.past_end
+    # goes on until disk 1 moves or crosses (the orbit) or the rest has lasted dwell
+    # (the equilibrium), as the CPU does.
     small = ASYM.replace(eta=1.0360360360360461, k12=0.018918918918918948)
     for system, kw, expected in (
         (small, dict(t_end=141.22, t_transient=50.0), ("ok", 1)),
         (ASYM.replace(eta=3.2), dict(t_end=157.48864927201203), ("equilibrium", 0)),
+        (ASYM.replace(eta=2.0), dict(t_end=119.0, t_transient=50.0, dwell=4.0), ("ok", 1)),
     ):
         kw.update(max_points=16, progress=False)
         gpu = sweep(system, "eta", [system.eta], backend="cuda", **kw)

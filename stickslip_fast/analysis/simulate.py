@@ -110,7 +110,9 @@ CLASSIFY_PARAMS_DOC = """
         Time at rest at the end of the run that makes it an equilibrium (see
         ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
         after which the run ends (default 200, about 15 periods of the slowest
-        free oscillation)."""
+        free oscillation). An orbit needs a crossing within the last ``dwell``; a
+        run whose disk 1 moves and that crossed before waits up to ``dwell`` past
+        ``t_end`` for its next crossing."""
 
 
 @fill_doc(method_params=METHOD_PARAMS_DOC, classify_params=CLASSIFY_PARAMS_DOC)

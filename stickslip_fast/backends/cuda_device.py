@@ -131,7 +131,7 @@ detect_period = _device_callable(poincare.detect_period)
 ring_period = _device_callable(poincare.ring_period)
 
 
-still_settling = _device_callable(poincare.still_settling)
+undecided = _device_callable(poincare.undecided)
 
 
 # the bordered O(N) factorisation and solve of W = sigma I - J
@@ -286,12 +286,14 @@ def _disks_at_rest(y, n_osc, tol):
 
 
 @cuda.jit(device=True)
-def _settling(t, rest_since, d1_rest_since, dwell, t_rec):
-    """``poincare.still_settling`` at ``t`` of a run whose rest is tracked as ``stoprules``
-    tracks it (NaN: moving), recording from ``t_rec``: ``stoprules.past_end``'s test."""
+def _undecided(t, rest_since, d1_rest_since, last_cross, dwell, t_rec):
+    """``poincare.undecided`` at ``t`` of a run whose rest and crossings are tracked as
+    ``stoprules`` tracks them (NaN: moving, none), recording from ``t_rec``:
+    ``stoprules.past_end``'s test."""
     rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
     d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
-    return still_settling(rest_time, d1_rest, min(dwell, t - t_rec))
+    since = math.inf if math.isnan(last_cross) else t - last_cross
+    return undecided(rest_time, d1_rest, since, min(dwell, t - t_rec))
 
 
 @cuda.jit(device=True)

@@ -60,8 +60,8 @@ from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
     _initial_step,
     _locate_upcrossing,
     _nan_rows,
-    _settling,
     _time_order,
+    _undecided,
     _write_counts,
     check_available,
     cuda,
@@ -91,9 +91,6 @@ _B = np.ascontiguousarray(RODAS5P.b, dtype=np.float64)
 _E = np.ascontiguousarray(RODAS5P.b_err, dtype=np.float64)
 _H = np.ascontiguousarray(RODAS5P.H, dtype=np.float64)
 _Q = RODAS5P.embedded_order + 1.0
-# PI step-size controller: the CPU kernel's constants
-_SAFETY, _FAC_MIN, _FAC_MAX = STEP_SAFETY, STEP_FAC_MIN, STEP_FAC_MAX
-_PI_ALPHA, _PI_BETA = PI_ALPHA, PI_BETA
 
 
 # ------------------------------------------------------------------- kernels
@@ -375,7 +372,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     if not ok:
                         h *= 0.25
                     else:
-                        h *= max(_FAC_MIN, _SAFETY * en ** (-1.0 / _Q))
+                        h *= max(STEP_FAC_MIN, STEP_SAFETY * en ** (-1.0 / _Q))
                     last_rejected = True
                     # "not >=" also catches a step size that is not a number
                     if not (h >= 1e-14 * max(1.0, abs(t))):
@@ -418,8 +415,8 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 jac_fresh = False
                 if adaptive:
                     en_c = max(en, 1e-10)
-                    fac = _SAFETY * en_c ** (-_PI_ALPHA / _Q) * err_prev ** (_PI_BETA / _Q)
-                    fac = min(_FAC_MAX, max(_FAC_MIN, fac))
+                    fac = STEP_SAFETY * en_c ** (-PI_ALPHA / _Q) * err_prev ** (PI_BETA / _Q)
+                    fac = min(STEP_FAC_MAX, max(STEP_FAC_MIN, fac))
                     if last_rejected:
                         fac = min(fac, 1.0)
                     h *= fac
@@ -450,7 +447,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                 else:
                     rest_since = math.nan
                 if phase == 2:  # past the window's end, as stoprules.past_end
-                    if not _settling(t, rest_since, d1_rest_since, dwell, t_transient):
+                    if not _undecided(t, rest_since, d1_rest_since, last_cross, dwell, t_transient):
                         running = False
                         break
                     continue
@@ -491,7 +488,9 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                                 ymin[i] = y[i]
                                 ymax[i] = y[i]
             if running and not t < t_stop:  # the window's last step, as stoprules.past_end
-                running = phase != 2 and _settling(t, rest_since, d1_rest_since, dwell, t_transient)
+                running = phase != 2 and _undecided(
+                    t, rest_since, d1_rest_since, last_cross, dwell, t_transient
+                )
                 if running:
                     phase = 2
                     t_stop += dwell

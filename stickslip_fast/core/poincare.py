@@ -121,6 +121,20 @@ def still_settling(rest_time: float, disk1_rest_time: float, tail: float) -> boo
 
 
 @njit(**_JIT)
+def undecided(rest_time: float, disk1_rest_time: float, since_crossing: float, tail: float) -> bool:
+    """True where a run's end cannot tell its label yet; a window that ends so looks past it.
+
+    :func:`still_settling`, or disk 1 moving with its last crossing longer than ``tail``
+    ago (``since_crossing`` finite): an orbit whose x1 minima are further apart than
+    the tail may be between two of them (:func:`classify` would say "no-crossings").
+    See :func:`stoprules.past_end`.
+    """
+    if still_settling(rest_time, disk1_rest_time, tail):
+        return True
+    return rest_time < 0.0 and disk1_rest_time < 0.0 and tail < since_crossing < np.inf
+
+
+@njit(**_JIT)
 def classify(
     rest_time: float,
     disk1_rest_time: float,

@@ -16,7 +16,7 @@ from collections import namedtuple
 import numpy as np
 
 from ..base.jit import JIT, njit
-from .poincare import ring_period, still_settling
+from .poincare import ring_period, undecided
 
 __all__ = [
     "StopRule",
@@ -266,29 +266,36 @@ def converged_now(stop, obs, t, y) -> bool:
 def past_end(stop, t, y, t_rec) -> bool:
     """The rule at the last step of the window (t >= ``S_T_END``) and after it.
 
-    A window that ends while the run is settling (:func:`poincare.still_settling`:
-    at rest, or disk 1 at rest, for less than the tail of the classification) would
-    leave the run "unsettled". Near the Hopf point a small orbit's speeds all dip
-    below ``equilibrium_tol`` near each extremum of x1, and a window that ends in such
-    a dip sees a run that has just come to rest. So such a run goes on, for at most
-    ``dwell`` more time units, and ends at the first step where it is no longer
-    settling: disk 1 moves (its crossings then decide, as for any run), or the rest has
-    lasted the tail (an equilibrium; "no-crossings" if disk 1 alone rests). A run that
-    is not settling at the end of its
-    window ends there, as before. ``t_rec`` is the start of the recording window.
-    Returns True to end the run. (Converged stopping has had its say at the window's
-    last step before this is asked.)
+    A window can end where the run's label cannot be told yet
+    (:func:`poincare.undecided`):
+
+    - while the run is settling (at rest, or disk 1 at rest, for less than the tail of
+      the classification), which would leave it "unsettled". Near the Hopf point a
+      small orbit's speeds all dip below ``equilibrium_tol`` near each extremum of x1,
+      and a window that ends in such a dip sees a run that has just come to rest;
+    - while disk 1 moves but its last crossing was longer than the tail ago, which
+      would make it "no-crossings". An orbit whose x1 minima are further apart than
+      ``dwell`` (a slow period 2 of the literature set: 229.9 and 6.3 time units)
+      looks so between two of them.
+
+    Such a run goes on, for at most ``dwell`` more time units, and ends at the first
+    step where its label is decided: a crossing, disk 1 moving again (its crossings
+    then decide, as for any run), or rest that has lasted the tail. A run that is
+    decided at the end of its window ends there, as before. ``t_rec`` is the start of
+    the recording window. Returns True to end the run. (Converged stopping has had its
+    say at the window's last step before this is asked.)
     """
     st = stop.state
     if st[S_PHASE] == PHASE_PAST_END:
         track_rest(stop, t, y)
     tail = min(stop.dwell, t - t_rec)
-    settling = still_settling(rest_time(stop, t), disk1_rest_time(stop, t), tail)
-    if settling and st[S_PHASE] != PHASE_PAST_END:
+    since = time_since_crossing(stop, t)
+    waiting = undecided(rest_time(stop, t), disk1_rest_time(stop, t), since, tail)
+    if waiting and st[S_PHASE] != PHASE_PAST_END:
         st[S_PHASE] = PHASE_PAST_END
         st[S_T_END] += stop.dwell
         return False
-    return not settling
+    return not waiting
 
 
 # ------------------------------------------------------------------ section
