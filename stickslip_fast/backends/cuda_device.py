@@ -286,13 +286,19 @@ def _disks_at_rest(y, n_osc, tol):
 
 
 @cuda.jit(device=True)
+def _since(t, t_start, never):
+    """``t - t_start``, or ``never`` while ``t_start`` is unset (NaN), as ``stoprules``'s
+    rest and crossing times."""
+    return never if math.isnan(t_start) else t - t_start
+
+
+@cuda.jit(device=True)
 def _undecided(t, rest_since, d1_rest_since, last_cross, dwell, t_rec):
     """``poincare.undecided`` at ``t`` of a run whose rest and crossings are tracked as
-    ``stoprules`` tracks them (NaN: moving, none), recording from ``t_rec``:
-    ``stoprules.past_end``'s test."""
-    rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
-    d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
-    since = math.inf if math.isnan(last_cross) else t - last_cross
+    ``stoprules`` tracks them, recording from ``t_rec``: ``stoprules.past_end``'s test."""
+    rest_time = _since(t, rest_since, -1.0)
+    d1_rest = _since(t, d1_rest_since, -1.0)
+    since = _since(t, last_cross, math.inf)
     return undecided(rest_time, d1_rest, since, min(dwell, t - t_rec))
 
 
@@ -300,8 +306,8 @@ def _undecided(t, rest_since, d1_rest_since, last_cross, dwell, t_rec):
 def _classify_end(t, rest_since, d1_rest_since, last_cross, dwell, t_rec, y, dc, p):
     """The status of a run that ended at ``t`` in state ``y`` with parameters ``p``, as
     ``trajectory._run`` classifies it."""
-    rest_time = -1.0 if math.isnan(rest_since) else t - rest_since
-    d1_rest = -1.0 if math.isnan(d1_rest_since) else t - d1_rest_since
-    since = math.inf if math.isnan(last_cross) else t - last_cross
+    rest_time = _since(t, rest_since, -1.0)
+    d1_rest = _since(t, d1_rest_since, -1.0)
+    since = _since(t, last_cross, math.inf)
     vb_end = y[y.shape[0] - 1] if dc else 0.0
     return classify(rest_time, d1_rest, min(dwell, t - t_rec), since, dc, vb_end, p[P_VB0])

@@ -275,7 +275,7 @@ def _stop_now(stop, obs, t, y):
                     track_rest(stop, t, y)
                 if t < stop.state[S_T_END]:
                     return False
-            # the window's last step, or past it: a run still settling goes on
+            # the window's last step, or past it: a run whose label is undecided goes on
             if stop.n_osc > 0:
                 return past_end(stop, t, y, obs.t_transient)
             return False

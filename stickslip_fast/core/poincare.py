@@ -161,7 +161,7 @@ def classify(
     - at rest at the end, but for less than the tail: "unsettled" (the run came
       to rest too late to tell; its crossings are round-off minima of x_1 at
       rest, never an orbit). The stop rules first look past the end of the
-      window while :func:`still_settling` (:func:`stoprules.past_end`);
+      window while the run is :func:`undecided` (:func:`stoprules.past_end`);
     - moving, with disk 1 at rest over the tail (disk 1 in steady sliding
       while another disk oscillates): "no-crossings": its x_1 has round-off
       minima only; with disk 1 at rest for less than the tail: "unsettled";

@@ -42,9 +42,9 @@ class SimulationResult:
     n_steps, n_rejected : int
         Accepted and rejected steps.
     t_final : float
-        Time reached: t_end, up to ``dwell`` later where the run was still
-        settling at t_end (see :func:`simulate`'s ``equilibrium_tol``), earlier
-        where it failed or converged.
+        Time reached: t_end, up to ``dwell`` later where the run's label was
+        undecided at t_end (see :func:`simulate`'s ``equilibrium_tol`` and
+        ``dwell``), earlier where it failed or converged.
     final_state : ndarray, shape (n_state,)
     amplitude : float
         Distance from rest over the recording window: the largest ``|dx_i|`` or

@@ -97,7 +97,7 @@ def converged_stop(
 @njit(**_JIT)
 def fixed_stop(equilibrium_tol, dwell, n_osc, dc, n) -> StopRule:
     """A STOP_AT_END rule that watches for rest (see :func:`rest_time`) and looks past
-    the end of the window while the run is settling (see :func:`past_end`)."""
+    the end of the window while the run's label is undecided (see :func:`past_end`)."""
     return StopRule(
         STOP_AT_END, 0, 0.0, 0, 0, 0, equilibrium_tol, dwell, n_osc, dc, np.empty(n),
         np.empty(n), np.zeros(STATE_SIZE),
