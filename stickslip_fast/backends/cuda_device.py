@@ -23,7 +23,7 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
 from numba import cuda, float64, int64, types  # noqa: F401  (cuda_kernels takes them from here)
 
 from ..base.status import STATUS_NAMES
-from ..core import poincare
+from ..core import poincare, stoprules
 from ..model import equations as model
 from ..model import linalg
 from ..model.params import P_VB0
@@ -132,6 +132,10 @@ ring_period = _device_callable(poincare.ring_period)
 
 
 undecided = _device_callable(poincare.undecided)
+
+
+# the stop rules' rest and crossing times: t - since, or a default while unset (NaN)
+_elapsed = _device_callable(stoprules._elapsed)
 
 
 # the bordered O(N) factorisation and solve of W = sigma I - J
@@ -286,19 +290,12 @@ def _disks_at_rest(y, n_osc, tol):
 
 
 @cuda.jit(device=True)
-def _since(t, t_start, never):
-    """``t - t_start``, or ``never`` while ``t_start`` is unset (NaN), as ``stoprules``'s
-    rest and crossing times."""
-    return never if math.isnan(t_start) else t - t_start
-
-
-@cuda.jit(device=True)
 def _undecided(t, rest_since, d1_rest_since, last_cross, dwell, t_rec):
     """``poincare.undecided`` at ``t`` of a run whose rest and crossings are tracked as
     ``stoprules`` tracks them, recording from ``t_rec``: ``stoprules.past_end``'s test."""
-    rest_time = _since(t, rest_since, -1.0)
-    d1_rest = _since(t, d1_rest_since, -1.0)
-    since = _since(t, last_cross, math.inf)
+    rest_time = _elapsed(rest_since, t, -1.0)
+    d1_rest = _elapsed(d1_rest_since, t, -1.0)
+    since = _elapsed(last_cross, t, math.inf)
     return undecided(rest_time, d1_rest, since, min(dwell, t - t_rec))
 
 
@@ -306,8 +303,8 @@ def _undecided(t, rest_since, d1_rest_since, last_cross, dwell, t_rec):
 def _classify_end(t, rest_since, d1_rest_since, last_cross, dwell, t_rec, y, dc, p):
     """The status of a run that ended at ``t`` in state ``y`` with parameters ``p``, as
     ``trajectory._run`` classifies it."""
-    rest_time = _since(t, rest_since, -1.0)
-    d1_rest = _since(t, d1_rest_since, -1.0)
-    since = _since(t, last_cross, math.inf)
+    rest_time = _elapsed(rest_since, t, -1.0)
+    d1_rest = _elapsed(d1_rest_since, t, -1.0)
+    since = _elapsed(last_cross, t, math.inf)
     vb_end = y[y.shape[0] - 1] if dc else 0.0
     return classify(rest_time, d1_rest, min(dwell, t - t_rec), since, dc, vb_end, p[P_VB0])
