@@ -21,6 +21,7 @@ import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis.sweep import sweep
+from stickslip_fast.base.status import LABEL_RULES
 from stickslip_fast.core import settings as settings_mod
 from stickslip_fast.core.settings import Settings
 
@@ -103,6 +104,9 @@ def test_file_written_before_settings_resumes_bit_identically(tmp_path):
         np.testing.assert_array_equal(getattr(resumed, name), getattr(fresh, name), err_msg=name)
     with h5py.File(old, "r") as h5:
         assert h5["done"][...].tolist() == [1, 1, 1, 1]
+        # written before label_rules existed (rules 1), with no value the rules since
+        # decide otherwise: it resumed, and now records the current rules
+        assert h5.attrs["label_rules"] == LABEL_RULES
     assert isinstance(resumed.settings, Settings) and resumed.settings.max_points == 4
     assert ssf.load_sweep(old).settings == resumed.settings
 

@@ -9,6 +9,8 @@ from typing import Any
 import h5py
 import numpy as np
 
+from ..base.status import LABEL_RULES
+
 SCHEMA_VERSION = 1
 
 
@@ -16,6 +18,7 @@ def write_root_attrs(attrs, text, digest, title, notes, package_version, kind=No
     """The root attributes every result file opens with (``kind``: census and trajectory files)."""
     attrs["schema_version"] = SCHEMA_VERSION
     attrs["package_version"] = package_version
+    attrs["label_rules"] = LABEL_RULES
     if kind is not None:
         attrs["kind"] = kind
     attrs["config"] = text

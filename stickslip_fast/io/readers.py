@@ -41,7 +41,7 @@ def sweep_summary(path: str | Path) -> dict[str, Any]:
     dict
         ``config`` (parsed, checked against its SHA-256), ``attrs`` (the root
         attributes ``title``, ``package_version``, ``schema_version``,
-        ``created`` where present), ``axes`` (name -> values), ``done`` (bool),
+        ``label_rules``, ``created`` where present), ``axes`` (name -> values), ``done`` (bool),
         ``status`` and ``period``.
 
     Raises
@@ -57,7 +57,7 @@ def sweep_summary(path: str | Path) -> dict[str, Any]:
                     "(no 'config' attribute or 'done' dataset)"
                 )
             config = stored_config(h5)
-            keys = ("title", "package_version", "schema_version", "created")
+            keys = ("title", "package_version", "schema_version", "label_rules", "created")
             return {
                 "config": config,
                 "attrs": {k: h5.attrs[k] for k in keys if k in h5.attrs},

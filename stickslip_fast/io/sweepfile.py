@@ -11,6 +11,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..base.status import LABEL_RULES, stale_labels, status_names
 from ..core.poincare import STATUS_NAMES
 from .base import (
     ConfigMismatchError,
@@ -36,6 +37,53 @@ from .layout import (
     write_root_attrs,
 )
 from .verify import _data_fields, scan_sweep, stored_config  # noqa: F401 (re-exported)
+
+
+def _check_label_rules(path: Path, src: h5py.File) -> None:
+    """Refuse to resume a file whose finished values the current rules could label differently.
+
+    A file written under older :data:`~stickslip_fast.base.status.LABEL_RULES` (root
+    attribute ``label_rules``; none: rules 1) resumes only if none of its finished
+    values has a status that the rules changed since then could decide otherwise:
+    every other value is what the current version computes, and one file never holds
+    labels decided by two sets of rules.
+    """
+    rules = int(src.attrs.get("label_rules", 1))
+    if rules >= LABEL_RULES:
+        return
+    try:
+        done = np.asarray(src["done"][...]) != 0
+        codes = np.asarray(src["status"][...])
+    except (OSError, RuntimeError, KeyError, ValueError) as exc:
+        raise ConfigMismatchError(
+            f"{path} was begun under older labelling rules (label_rules {rules}; this version "
+            f"applies {LABEL_RULES}), and its statuses cannot be read to check which of its "
+            f"values they would change ({_short(exc)}). Write to another output path, or "
+            "delete the file to start over."
+        ) from None
+    stale = done & stale_labels(rules, codes)
+    if stale.any():
+        names = " or ".join(repr(n) for n in sorted(set(status_names(codes[stale]))))
+        raise ConfigMismatchError(
+            f"{path} was begun under older labelling rules (label_rules {rules}; this version "
+            f"applies {LABEL_RULES}): {int(stale.sum())} of its {int(done.sum())} finished "
+            f"values are labelled {names}, which the current rules could decide differently "
+            "(docs/file-format.md, 'label_rules'). Resuming would mix two sets of rules in "
+            "one file. Finish it with the version that began it, or write to another output "
+            "path (or delete the file) to compute every value under the current rules."
+        )
+
+
+def _for_appending(path: Path) -> h5py.File:
+    """Open a checked file for writing; its labels are now those of the current rules."""
+    h5 = h5py.File(path, "r+", libver="latest")
+    try:
+        if h5.attrs.get("label_rules") != LABEL_RULES:
+            h5.attrs["label_rules"] = LABEL_RULES
+    except BaseException:
+        h5.close()
+        raise
+    return h5
 
 
 class SweepFile:
@@ -146,13 +194,14 @@ class SweepFile:
                 )
             if schema != SCHEMA_VERSION:
                 raise ConfigMismatchError(f"{path} has an unsupported schema version {schema!r}")
+            _check_label_rules(path, src)
             problems, bad = scan_sweep(src, layout, meta[2])
         truncated = _truncation(path)
         if truncated:
             problems.insert(0, truncated)
         if not problems:
             try:
-                return h5py.File(path, "r+", libver="latest")
+                return _for_appending(path)
             except OSError as exc:
                 if "already open for write" not in str(exc):
                     problems.append(f"cannot be opened for writing ({_short(exc)})")
@@ -168,7 +217,7 @@ class SweepFile:
                 UserWarning,
                 stacklevel=4,
             )
-        return h5py.File(path, "r+", libver="latest")
+        return _for_appending(path)
 
     @staticmethod
     def _create_layout(h5, layout, text, digest, config, title, notes, package_version):

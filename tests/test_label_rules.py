@@ -1,0 +1,109 @@
+"""Result files record the rules that labelled them, and never mix two sets of rules.
+
+A file begun under older labelling rules (``label_rules``, absent: 1) resumes only if
+none of its finished values has a status that the rules changed since could decide
+otherwise (docs/file-format.md). The premise that makes this safe: rules 2 (a window
+that ends undecided looks past its end) act exactly where rules 1 said "unsettled" or
+"no-crossings" (``tests/test_converged.py`` holds ``poincare.undecided`` to
+``classify``), so every other value ends where, and as, it did.
+"""
+
+import hashlib
+import warnings
+
+import h5py
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.base.status import (
+    LABEL_RULES,
+    ST_NO_CROSSINGS,
+    ST_UNSETTLED,
+    STATUS_NAMES,
+    stale_labels,
+)
+from stickslip_fast.io import ConfigMismatchError
+
+ASYM = ssf.System.preset("asymmetric")
+ETAS = np.array([5.2, 6.6, 9.99])
+KW = dict(t_end=300.0, t_transient=200.0, max_points=8, progress=False)
+
+
+@pytest.fixture(autouse=True)
+def _quiet_no_orbit_warnings():
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*gave no orbit.*")
+        yield
+
+
+def _as_if_older(path, status=None, undone=2):
+    """Make ``path`` look like a file of rules 1 interrupted before value ``undone``."""
+    with h5py.File(path, "r+") as h5:
+        del h5.attrs["label_rules"]
+        h5["done"][undone] = 0
+        if status is not None:
+            h5["status"][0] = status
+
+
+def _digest(path):
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def test_only_the_statuses_the_look_past_the_end_acts_on_are_stale():
+    codes = np.arange(-1, len(STATUS_NAMES))
+    stale = stale_labels(1, codes)
+    assert codes[stale].tolist() == [ST_NO_CROSSINGS, ST_UNSETTLED]
+    assert not stale_labels(LABEL_RULES, codes).any()
+    assert LABEL_RULES == 2
+
+
+def test_a_new_file_records_its_rules_and_an_older_one_without_stale_labels_resumes(tmp_path):
+    fresh = ssf.sweep(ASYM, "eta", ETAS, out=tmp_path / "fresh.h5", **KW)
+    assert list(fresh.status) == ["equilibrium", "ok", "ok"]  # the premise: nothing stale
+    with h5py.File(tmp_path / "fresh.h5", "r") as h5:
+        assert h5.attrs["label_rules"] == LABEL_RULES
+    old = tmp_path / "old.h5"
+    ssf.sweep(ASYM, "eta", ETAS, out=old, **KW)
+    _as_if_older(old)
+    resumed = ssf.sweep(ASYM, "eta", ETAS, out=old, **KW)
+    for name in ("points", "final_state", "status_code", "period", "n_steps"):
+        np.testing.assert_array_equal(getattr(resumed, name), getattr(fresh, name), err_msg=name)
+    with h5py.File(old, "r") as h5:
+        assert h5.attrs["label_rules"] == LABEL_RULES
+        assert h5["done"][...].tolist() == [1, 1, 1]
+
+
+@pytest.mark.parametrize("status", [ST_UNSETTLED, ST_NO_CROSSINGS])
+def test_an_older_file_with_values_the_rules_now_decide_otherwise_is_refused(tmp_path, status):
+    old = tmp_path / "old.h5"
+    first = ssf.sweep(ASYM, "eta", ETAS, out=old, **KW).status_code[0]
+    _as_if_older(old, status=status)
+    before = _digest(old)
+    name = STATUS_NAMES[status]
+    with pytest.raises(
+        ConfigMismatchError,
+        match=rf"label_rules 1.*1 of its 2 finished values are labelled '{name}'",
+    ):
+        ssf.sweep(ASYM, "eta", ETAS, out=old, **KW)
+    assert _digest(old) == before  # untouched
+    # a value of that status that is not finished (done = 0) is computed anew: no refusal
+    with h5py.File(old, "r+") as h5:
+        h5["done"][0] = 0
+    ssf.sweep(ASYM, "eta", ETAS, out=old, **KW)
+    with h5py.File(old, "r") as h5:
+        assert h5.attrs["label_rules"] == LABEL_RULES
+        assert h5["status"][0] == first
+
+
+def test_a_census_file_follows_the_same_rule(tmp_path):
+    kw = dict(n_starts=3, seed=7, t_end=300.0, t_transient=150.0, max_points=32, progress=False)
+    path = tmp_path / "census.h5"
+    ssf.census(ASYM, "eta", [2.0, 7.0], out=path, **kw)
+    with h5py.File(path, "r+") as h5:
+        assert h5.attrs["label_rules"] == LABEL_RULES
+        del h5.attrs["label_rules"]
+        h5["done"][1, 2] = 0
+        h5["status"][0, 1] = ST_UNSETTLED
+    with pytest.raises(ConfigMismatchError, match=r"1 of its 5 finished values .*'unsettled'"):
+        ssf.census(ASYM, "eta", [2.0, 7.0], out=path, **kw)
