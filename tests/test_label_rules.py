@@ -23,6 +23,7 @@ from stickslip_fast.base.status import (
     STATUS_NAMES,
     stale_labels,
 )
+from stickslip_fast.cli.report import _report
 from stickslip_fast.io import ConfigMismatchError
 
 ASYM = ssf.System.preset("asymmetric")
@@ -72,6 +73,7 @@ def test_a_new_file_records_its_rules_and_an_older_one_without_stale_labels_resu
     with h5py.File(old, "r") as h5:
         assert h5.attrs["label_rules"] == LABEL_RULES
         assert h5["done"][...].tolist() == [1, 1, 1]
+    assert f"label rules {LABEL_RULES}," in _report(old)  # what stickslip-fast info shows
 
 
 @pytest.mark.parametrize("status", [ST_UNSETTLED, ST_NO_CROSSINGS])

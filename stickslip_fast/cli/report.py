@@ -14,7 +14,8 @@ def _header(name: str, attrs: dict, cfg: dict) -> list[str]:
         lines.append(f"title:     {attrs['title']}")
     lines.append(
         f"package:   stickslip_fast {attrs.get('package_version', '?')}, "
-        f"schema {attrs.get('schema_version')}, created {attrs.get('created', '?')}"
+        f"schema {attrs.get('schema_version')}, label rules {attrs.get('label_rules', 1)}, "
+        f"created {attrs.get('created', '?')}"
     )
     sysd = {k: v for k, v in cfg.get("system", {}).items() if v is not None}
     lines.append("system:    " + " ".join(f"{k}={v}" for k, v in sysd.items()))
