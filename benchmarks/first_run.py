@@ -11,6 +11,10 @@ once more on the cache it filled:
   step loop) compiled on its own, called from Python with records that a small
   compiled setup built first (timed apart, in the same process). A first
   ``simulate`` cannot compile in less than this without a smaller driver.
+- ``readme_orbits``: the orbit lines of the README's Python quick start, a
+  converged ``simulate`` at eta = 2, ``find_orbit`` and ``continue_orbit`` in eta
+  to 3.3, each timed apart in the child (most of it is the variational kernel's
+  compile, which the two orbit calls share since 2026-11-28).
 - ``readme_main_job``: the README's first command,
   ``stickslip-fast sweep data/fig06_asymmetric_constant.toml -o out.h5`` (the Fig. 6
   diagram, 1000 values, all cores), as ``python -m stickslip_fast.cli``.
@@ -88,6 +92,25 @@ _DRIVER_FLOOR = textwrap.dedent(
 )
 
 
+_ORBITS = textwrap.dedent(
+    """
+    import json, time
+    import stickslip_fast as ssf
+    low = ssf.System.preset("asymmetric", eta=2.0)
+    t0 = time.perf_counter()
+    res = ssf.simulate(low, 3000, stop="converged")
+    t1 = time.perf_counter()
+    orbit = ssf.find_orbit(low, res)
+    t2 = time.perf_counter()
+    branch = ssf.continue_orbit(orbit, "eta", (2.0, 3.3))
+    t3 = time.perf_counter()
+    assert orbit.converged and len(branch.values) > 10, (orbit.status, len(branch.values))
+    print(json.dumps(dict(simulate_s=round(t1 - t0, 2), find_orbit_s=round(t2 - t1, 2),
+                          continue_orbit_s=round(t3 - t2, 2))))
+    """
+)
+
+
 def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
     """One fresh process: its wall time and CPU time (user + system of the child)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(root))
@@ -95,6 +118,8 @@ def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
         cmd = [sys.executable, "-c", _SIMULATE]
     elif job == "driver_floor":
         cmd = [sys.executable, "-c", _DRIVER_FLOOR]
+    elif job == "readme_orbits":
+        cmd = [sys.executable, "-c", _ORBITS]
     else:
         config = str(root / "data" / "fig06_asymmetric_constant.toml")
         out = os.path.join(workdir, "fig06.h5")
@@ -110,7 +135,7 @@ def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
         raise RuntimeError(f"{job} failed in {root}:\n{proc.stderr[-3000:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     rec = dict(wall_s=round(wall, 2), cpu_s=round(cpu, 2))
-    if job == "driver_floor":  # the child's own split: setup compile, then the driver's
+    if job in ("driver_floor", "readme_orbits"):  # the child's own split of its time
         rec.update(json.loads(proc.stdout.strip().splitlines()[-1]))
     return rec
 
@@ -123,7 +148,7 @@ def _summary(runs: list[dict]) -> dict:
     )
 
 
-JOBS = ("first_simulate", "driver_floor", "readme_main_job")
+JOBS = ("first_simulate", "driver_floor", "readme_orbits", "readme_main_job")
 
 
 def run(roots=(ROOT,), repeats: int = 3, log=print, jobs=JOBS) -> dict:

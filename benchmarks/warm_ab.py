@@ -8,7 +8,10 @@ CPU time, best of ``--best`` calls:
   9.99, t_end 3000, points after 2000 (the README's call);
 - two disks on a DC motor (η = 1.5, the first disk's x offset by 1e-3), t_end 3000;
 - 32 desynchronised disks on a DC motor (``n_scaling``'s start), t_end 300;
-- a 60-value Fig. 6 sweep (η 1 to 10), t_end 3000.
+- a 60-value Fig. 6 sweep (η 1 to 10), t_end 3000;
+- ``find_orbit`` from a converged run at η = 2.0 (period 1) and 9.99 (period 2): the
+  plain tangent path (Newton, multipliers), and ``continue_orbit`` from η = 2.0 to 2.3
+  (at most 10 points): the tangents with the parameter sensitivity.
 
 The report is the best over the processes per checkout, and the ratio of the last
 checkout to the first. Usage::
@@ -67,6 +70,14 @@ s6 = ssf.System.preset("asymmetric")
 vals = np.linspace(1.0, 10.0, 60)
 out["sweep fig6 60 values 1 thread"] = best(
     lambda: ssf.sweep(s6, "eta", vals, t_end=3000, t_transient=2000, progress=False), 3)
+for eta in (2.0, 9.99):
+    so = ssf.System.preset("asymmetric", eta=eta)
+    conv = ssf.simulate(so, 20000, stop="converged")
+    out[f"find_orbit eta={eta}"] = best(lambda: ssf.find_orbit(so, conv), max(3, n // 3))
+    if eta == 2.0:
+        orb = ssf.find_orbit(so, conv)
+        out["continue_orbit eta 2.0-2.3"] = best(
+            lambda: ssf.continue_orbit(orb, "eta", (2.0, 2.3), max_points=10), 3)
 print(json.dumps(out))
 """
 

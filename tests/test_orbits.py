@@ -123,6 +123,23 @@ def test_parameter_sensitivity_is_one_sided_at_the_valid_range_edge():
         return_map(s, np.zeros(4), 1, param="nope")
 
 
+def test_finding_and_continuing_an_orbit_share_one_compiled_kernel(orbits):
+    # issue 30: two variational kernels (plain tangents for find_orbit, tangents with
+    # the parameter sensitivity for continue_orbit) compiled for ~17 and ~19 s on a
+    # fresh install; now find_orbit runs the sensitivity kernel with the sensitivity
+    # off, and continuing the orbit it found compiles nothing more
+    from numba.core.dispatcher import Dispatcher
+
+    from stickslip_fast.core import variational
+
+    assert not isinstance(variational.propagate_tangents, Dispatcher)
+    found = set(variational.propagate_sensitivity.signatures)
+    assert found  # find_orbit (the fixture) ran it
+    branch = ssf.continue_orbit(orbits[2.0], "eta", (2.0, 2.02), ds=0.01, max_points=3)
+    assert len(branch.points) >= 2
+    assert set(variational.propagate_sensitivity.signatures) == found
+
+
 def test_leading_multiplier_at_eta_2_is_the_issue_value(orbits):
     # issue 10: independent shooting gives -0.0969, ~1e-8, ~2e-11
     m = orbits[2.0].multipliers

@@ -68,7 +68,7 @@ def run_job(job: tuple[str, str, int, str]) -> dict:
         for mode in ("restart", "continuation"):
             sweep(system, "eta", np.array([5.0, 6.0]), t_end=1.0, mode=mode,
                   progress=False, **kw)  # fmt: skip
-    else:  # the tangent kernel, and the one with the parameter's sensitivity
+    else:  # the variational kernel: its sensitivity off (find_orbit) and on (continue_orbit)
         z = system.initial_state(None) + 1e-3
         _field(system, z)  # the vector field from Python (find_orbit's start and checks)
         return_map(system, z, 1, t_max=1.0)

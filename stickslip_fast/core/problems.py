@@ -125,9 +125,11 @@ StickSlipSmall = namedtuple("StickSlipSmall", ["p", "shape"])
 #: The model with ``n_tangent`` tangent vectors; ``jb``, ``jcol``, ``jrow`` are
 #: scratch for J(y) u inside the right-hand side, ``unorm`` for the error norm,
 #: ``d2`` the friction's second partials at the last Jacobian's point (N, 6).
-#: ``sens`` is None (plain tangent vectors) or a :class:`ParamSensitivity`: then
-#: the last tangent vector is s = dy/dlambda. The two are different types, so
-#: the plain record compiles without a trace of the sensitivity's code.
+#: ``sens`` is None (plain tangent vectors) or a :class:`ParamSensitivity`: then,
+#: unless its ``inv`` is 0 (inactive), the last tangent vector is s = dy/dlambda.
+#: The Lyapunov kernel takes None (its plain record compiles without the
+#: sensitivity's code); orbits take a record, active or not, so that finding an
+#: orbit and continuing it share one compiled kernel (:mod:`.variational`).
 StickSlipTangent = namedtuple(
     "StickSlipTangent",
     ["p", "n_osc", "dc", "n_tangent", "tangent_atol", "jb", "jcol", "jrow", "unorm", "d2", "sens"],

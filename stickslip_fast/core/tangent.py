@@ -75,7 +75,8 @@ def make_sensitivity(p2: np.ndarray, inv: float, n_osc: int, dc: bool) -> ParamS
     """A :class:`ParamSensitivity` from the packed parameters at lambda +- h (2, N_PARAMS).
 
     ``inv`` is 1 / (the difference of lambda between the two rows); eta' is
-    derived from eta in a copy of ``p2``.
+    derived from eta in a copy of ``p2``. ``inv`` = 0 makes it inactive: every
+    tangent vector is then a plain one, with the plain problem's arithmetic.
     """
     pp = p2.copy()
     for r in range(2):
@@ -150,7 +151,7 @@ def _tangent_f(prob, sens, y, out):
             prob.jb, prob.jcol, prob.jrow, corner, n_osc, dc,
             y[j * n : (j + 1) * n], out[j * n : (j + 1) * n],
         )  # fmt: skip
-    if sens is not None:
+    if sens is not None and sens.inv != 0.0:
         # the sensitivity's inhomogeneous term df/dlambda (central difference of f)
         fp = sens.f2[0]
         fm = sens.f2[1]
@@ -172,7 +173,7 @@ def _tangent_jac(prob, sens, y, lin):
     second_partials_at(y[:n], prob.p, n_osc, dc, prob.d2)
     for i in range(y.size):
         lin.at[i] = y[i]
-    if sens is not None:
+    if sens is not None and sens.inv != 0.0:
         # dJ/dlambda for the sensitivity's block row
         s = sens.inv
         cp = jacobian_blocks(y[:n], sens.p2[0], n_osc, dc, sens.jb, sens.jcol, sens.jrow)
@@ -201,7 +202,7 @@ def _tangent_solve(prob, sens, lin, b):
         second_derivative_form_at(prob.d2, lin.at[j * n : (j + 1) * n], ky, prob.p, n_osc, dc, hv)
         for i in range(n):
             ku[i] += hv[i]
-        if sens is not None and j == prob.n_tangent:
+        if sens is not None and sens.inv != 0.0 and j == prob.n_tangent:
             # the sensitivity's row of the exact Jacobian has dJ/dlambda too
             bordered_matvec_inline(sens.jb, sens.jcol, sens.jrow, sens.corner[0], n_osc, dc, ky, hv)
             for i in range(n):
@@ -221,7 +222,7 @@ def _tangent_error_norm(prob, sens, err, y0, y1, rtol, atol):
         for r in range(j * n, (j + 1) * n):
             un += y0[r] * y0[r]
         prob.unorm[j - 1] = math.sqrt(un)
-    if sens is not None:
+    if sens is not None and sens.inv != 0.0:
         prob.unorm[k - 1] = max(prob.unorm[k - 1], 1.0)
     acc = 0.0
     for i in range(n):

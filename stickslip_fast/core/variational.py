@@ -35,7 +35,6 @@ __all__ = ["propagate_tangents", "propagate_sensitivity"]
 _JIT = JIT
 
 
-@njit(**ENTRY)
 def propagate_tangents(
     y0: np.ndarray,
     U0: np.ndarray,
@@ -63,17 +62,21 @@ def propagate_tangents(
     bit-identical to the generic one and faster) or ``()`` (the generic kernel).
     A token that does not match (n_osc, dc) gives status "error".
 
+    This is :func:`propagate_sensitivity` with its sensitivity off (``inv`` = 0):
+    the same arithmetic as a kernel without one, bit for bit, from the one
+    compiled kernel that continuation needs as well. Two kernels compiled for
+    about 17 and 19 s on a fresh install; a newcomer's first ``find_orbit``
+    and ``continue_orbit`` paid both (docs/performance.md, "The first run").
+
     Returns
     -------
     (status, y, U, t): the driver's status code, the state (n,), the tangent
     vectors (n, k) and the time, at the last crossing (``n_crossings`` > 0,
     t = NaN if it was not reached) or at the final time.
     """
-    if not variant_matches(variant, n_osc, dc):
-        return _failed(y0, U0)
-    prob = make_tangent(p, n_osc, dc, U0.shape[1], tangent_atol, np.empty(N_PARAMS))
-    return _propagate(
-        tangent_variant(prob, variant), y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol,
+    p2 = np.stack((p, p))
+    return propagate_sensitivity(
+        y0, U0, p, n_osc, dc, variant, t_end, n_crossings, rtol, atol, tangent_atol, p2, 0.0,
         max_steps, abort,
     )  # fmt: skip
 
@@ -103,10 +106,14 @@ def propagate_sensitivity(
     follows s' = J s + df/dlambda, with df/dlambda and dJ/dlambda central
     differences of the model's equations (start it at 0 for d phi_t / d lambda).
     The other columns are tangent vectors as in :func:`propagate_tangents`, and
-    the returns are the same. A separate kernel, so that the plain tangent
-    problem compiles without the sensitivity's code.
+    the returns are the same. ``inv`` = 0 turns the sensitivity off: every
+    column is then a tangent vector (:func:`propagate_tangents`).
     """
-    if not variant_matches(variant, n_osc, dc) or U0.shape[1] < 1 or p2.shape[0] != 2:
+    if (
+        not variant_matches(variant, n_osc, dc)
+        or (inv != 0.0 and U0.shape[1] < 1)
+        or p2.shape[0] != 2
+    ):
         return _failed(y0, U0)
     sens = make_sensitivity(p2, inv, n_osc, dc)
     prob = make_tangent(p, n_osc, dc, U0.shape[1], tangent_atol, np.empty(N_PARAMS), sens)
