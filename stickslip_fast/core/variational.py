@@ -116,22 +116,10 @@ def propagate_sensitivity(
     ):
         return _failed(y0, U0)
     sens = make_sensitivity(p2, inv, n_osc, dc)
-    prob = make_tangent(p, n_osc, dc, U0.shape[1], tangent_atol, np.empty(N_PARAMS), sens)
-    return _propagate(
-        tangent_variant(prob, variant), y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol,
-        max_steps, abort,
-    )  # fmt: skip
-
-
-@njit(**_JIT)
-def _failed(y0, U0):
-    n, k = U0.shape
-    return ST_ERROR, np.full(n, np.nan), np.full((n, k), np.nan), np.nan
-
-
-@njit(**_JIT)
-def _propagate(prob, y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol, max_steps, abort):
-    """The driver run shared by both entry points (``prob``: a tangent record)."""
+    plain = make_tangent(p, n_osc, dc, U0.shape[1], tangent_atol, np.empty(N_PARAMS), sens)
+    prob = tangent_variant(plain, variant)
+    # the driver run, in this function: a compiled level of its own (shared by two
+    # kernels until 2026-11-28) re-optimised the whole driver once more (~1.5 s cold)
     n = y0.size
     k = U0.shape[1]
     m = n * (1 + k)
@@ -163,3 +151,9 @@ def _propagate(prob, y0, U0, n_osc, dc, t_end, n_crossings, rtol, atol, max_step
         for j in range(k):
             U[i, j] = src[(j + 1) * n + i]
     return status, y_out, U, t
+
+
+@njit(**_JIT)
+def _failed(y0, U0):
+    n, k = U0.shape
+    return ST_ERROR, np.full(n, np.nan), np.full((n, k), np.nan), np.nan
