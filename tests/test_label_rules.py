@@ -109,3 +109,15 @@ def test_a_census_file_follows_the_same_rule(tmp_path):
         h5["status"][0, 1] = ST_UNSETTLED
     with pytest.raises(ConfigMismatchError, match=r"1 of its 5 finished values .*'unsettled'"):
         ssf.census(ASYM, "eta", [2.0, 7.0], out=path, **kw)
+
+
+def test_a_file_of_newer_rules_is_refused_and_left_as_it_was(tmp_path):
+    path = tmp_path / "newer.h5"
+    ssf.sweep(ASYM, "eta", ETAS, out=path, **KW)
+    with h5py.File(path, "r+") as h5:
+        h5.attrs["label_rules"] = LABEL_RULES + 1
+        h5["done"][2] = 0
+    before = _digest(path)
+    with pytest.raises(ConfigMismatchError, match=rf"newer version.*label_rules {LABEL_RULES + 1}"):
+        ssf.sweep(ASYM, "eta", ETAS, out=path, **KW)
+    assert _digest(path) == before

@@ -46,10 +46,17 @@ def _check_label_rules(path: Path, src: h5py.File) -> None:
     attribute ``label_rules``; none: rules 1) resumes only if none of its finished
     values has a status that the rules changed since then could decide otherwise:
     every other value is what the current version computes, and one file never holds
-    labels decided by two sets of rules.
+    labels decided by two sets of rules. A file of newer rules is refused.
     """
     rules = int(src.attrs.get("label_rules", 1))
-    if rules >= LABEL_RULES:
+    if rules > LABEL_RULES:
+        raise ConfigMismatchError(
+            f"{path} was begun by a newer version of stickslip_fast (label_rules {rules}; "
+            f"this version applies {LABEL_RULES}): its values may be labelled by rules this "
+            "version does not know. Finish it with that version, or write to another output "
+            "path."
+        )
+    if rules == LABEL_RULES:
         return
     try:
         done = np.asarray(src["done"][...]) != 0
