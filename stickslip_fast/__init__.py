@@ -13,8 +13,10 @@ Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load
 from __future__ import annotations
 
 from .base import cache_guard as _cache_guard
+from .base import compile_gc as _compile_gc
 
 _cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
+_compile_gc.install()  # no full garbage collections during a Numba compile
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
