@@ -3,16 +3,16 @@
 A first ``simulate`` or ``find_orbit`` makes Numba build and drop millions of Python
 objects (its IR, types and LLVM handles, many of them in reference cycles). Python's
 cyclic collector walks every live object of the process at each full collection, and
-during a cold compile those took about a tenth of it (``gc.callbacks``: 1.5 s of a
-13.5 s first ``simulate``, 1.3 s of that in full collections; docs/performance.md,
+during a cold compile those took about a tenth of it (``gc.callbacks``: 1.6 s of a
+14.6 s first ``simulate``, 1.36 s of that in 12 full collections; docs/performance.md,
 "The first run"). :func:`install` registers a listener on Numba's ``numba:compile``
 event (Numba's event API; it fires only when a function is compiled, not when one is
 loaded from the cache). From the start of the outermost compile to its end the
 collector runs its young collections only, every :data:`YOUNG_THRESHOLD` allocations;
 then its thresholds are restored. The cycles that outlive two young collections wait
-for the next full collection after the compile: about 30-50 MB more at the peak of a
+for the next full collection after the compile: about 30-60 MB more at the peak of a
 first ``find_orbit`` (turning the collector off altogether saved no more time and
-held 190 MB).
+held 190 MB more).
 
 Nothing computed depends on it. Numba compiles under its global compiler lock, so one
 thread at a time runs inside the listener. A collector that is off is left alone. Set
