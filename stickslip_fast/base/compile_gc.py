@@ -26,7 +26,7 @@ import os
 
 from numba.core import event
 
-__all__ = ["CompileGCPause", "install", "uninstall", "installed"]
+__all__ = ["CompileGCPause", "install", "installed"]
 
 ENV_VAR = "STICKSLIP_FAST_PAUSE_GC"
 EVENT = "numba:compile"
@@ -46,11 +46,11 @@ class CompileGCPause(event.Listener):
         self.saved: tuple[int, ...] | None = None  # thresholds to restore, if changed
 
     def on_start(self, ev: event.Event) -> None:  # noqa: ARG002 - the Listener API
-        if self.depth == 0 and gc.isenabled():
+        young, middle, _ = gc.get_threshold()
+        # a young threshold 0 turns collection off, as gc.disable() does: keep it so
+        if self.depth == 0 and gc.isenabled() and young > 0:
             self.saved = gc.get_threshold()
-            young, middle = self.saved[0], self.saved[1]
-            if young > 0:  # a threshold 0 turns collection off: keep it so
-                gc.set_threshold(max(young, YOUNG_THRESHOLD), middle, NEVER)
+            gc.set_threshold(max(young, YOUNG_THRESHOLD), middle, NEVER)
         self.depth += 1
 
     def on_end(self, ev: event.Event) -> None:  # noqa: ARG002 - also after a failed compile
@@ -81,15 +81,6 @@ def install() -> bool:
         _LISTENER = CompileGCPause()
         event.register(EVENT, _LISTENER)
     return _LISTENER is not None
-
-
-def uninstall() -> None:
-    """Remove the listener, restoring thresholds it holds changed (mid-compile)."""
-    global _LISTENER
-    if _LISTENER is not None:
-        event.unregister(EVENT, _LISTENER)
-        _LISTENER.restore()
-        _LISTENER = None
 
 
 def installed() -> bool:
