@@ -13,9 +13,11 @@ Main entry points: :class:`System`, :func:`simulate`, :func:`sweep`, :func:`load
 from __future__ import annotations
 
 from .base import cache_guard as _cache_guard
+from .base import cache_index as _cache_index
 from .base import compile_gc as _compile_gc
 
 _cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
+_cache_index.install()  # an index naming a type that is gone is a cache miss, not a crash
 _compile_gc.install()  # no full garbage collections during a Numba compile
 
 # ruff: noqa: E402
