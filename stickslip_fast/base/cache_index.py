@@ -37,7 +37,10 @@ class UnreadableCacheIndex(RuntimeWarning):
 
 @functools.lru_cache(maxsize=1)
 def _package_cache_dirs() -> frozenset[str]:
-    return frozenset(os.path.normcase(os.path.abspath(d)) for d in cache_dirs())
+    try:
+        return frozenset(os.path.normcase(os.path.abspath(d)) for d in cache_dirs())
+    except Exception:  # noqa: BLE001 - no usable cache location: nothing is the package's
+        return frozenset()
 
 
 def _of_package(cache_path: str) -> bool:
