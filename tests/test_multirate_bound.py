@@ -30,7 +30,7 @@ SCRIPT = textwrap.dedent(
     z = np.zeros((1, mb.N_STATE))
     z[0, :4] = y0
     steps = np.zeros((1, 2), dtype=np.int64)
-    st = mb.integrate_disks(p, z, 0.0, ds, coef, 0.0, 0.0, t_end, t_end,
+    st = mb.integrate_disks(p, z, 0.0, ds, coef, 0.0, t_end, t_end,
                             np.empty((1, 2, mb.N_STATE)), 1e-10, 1e-13, steps)
     ref = ssf.simulate(one, t_end, y0=y0, rtol=1e-10, atol=1e-13, max_points=10)
     out = dict(status=int(st), t=float(z[0, 4]),
