@@ -53,9 +53,10 @@ spacing ``--ds``. The error norm is the driver's default (RMS over the six
 components; t has no error). With v_b constant, a disk reproduces a constant-belt
 ``simulate`` (tests/test_multirate_bound.py).
 
-The driver's Numba cache index would record :class:`PrescribedBelt`, a type from
-outside the package, so the script compiles into a cache folder of its own (it
-re-executes itself with ``NUMBA_CACHE_DIR`` set when it is not).
+The disk's problem record is in ``benchmarks/multirate_disk.py``. The driver's Numba
+cache index would record it, a type from outside the package, so the script compiles
+into a cache folder of its own (it re-executes itself with ``NUMBA_CACHE_DIR`` set when
+it is not).
 
 Run::
 
@@ -76,234 +77,25 @@ import os
 import sys
 import tempfile
 import time
-from collections import namedtuple
 from pathlib import Path
 
 import numba
 import numpy as np
-from numba import types
-from numba.extending import overload
 
 import stickslip_fast as ssf
 from benchmarks.common import machine_info
-from stickslip_fast.base.jit import ENTRY, JIT, OVERLOAD, njit
-from stickslip_fast.core import problems
-from stickslip_fast.core.driver import (
-    STOP_AT_END,
-    Controls,
-    PoincareObserver,
-    Section,
-    drive,
-    simple_stop,
-)
-from stickslip_fast.core.steppers import RODAS5P_METHOD, alloc_workspace
-from stickslip_fast.model.equations import (
-    friction,
-    friction_factor,
-    friction_partials,
-    jacobian_blocks,
-    rhs,
-)
-from stickslip_fast.model.linalg import dense_w_factor, lu_solve
-from stickslip_fast.model.params import (
-    P_BETA,
-    P_C,
-    P_C12,
-    P_EPS,
-    P_ETAP,
-    P_M,
-    P_TB,
-    P_VB,
-    P_VB0,
-)
+from benchmarks.multirate_disk import N_STATE, force_of_disks, integrate_disks, quintic
+from stickslip_fast.model.params import P_BETA, P_EPS, P_ETAP, P_TB, P_VB0
 
 RESULTS = Path(__file__).resolve().parent / "results"
-# Numba keys a cached kernel on its own file only: the driver compiled for this file's
-# record would not see an edit of the record's functions, so the folder is per source
+# Numba keys a cached kernel on its own file only: the driver compiled for the record of
+# multirate_disk.py would not see an edit of it, so the folder is per source
 CACHE = Path(tempfile.gettempdir()) / (
-    "stickslip_fast_multirate_bound_" + hashlib.sha1(Path(__file__).read_bytes()).hexdigest()[:12]
+    "stickslip_fast_multirate_bound_"
+    + hashlib.sha1(
+        (Path(__file__).parent / "multirate_disk.py").read_bytes() + Path(__file__).read_bytes()
+    ).hexdigest()[:12]
 )
-N_STATE = 6  # x, x', phi, phi', t, r
-
-#: The linear workspace of :class:`PrescribedBelt`. W = sigma I - J is block triangular
-#: (the time row of J is zero, the quadrature column is zero), so only the disk's 4 x 4
-#: block ``blocks[0]`` (the model's ``jacobian_blocks``) is factored (``lu``, ``piv``);
-#: ``border_col``/``border_row`` are its unused border, ``jt`` is d f_disk / dt, ``jr``
-#: the quadrature's row of J and ``sigma`` holds sigma.
-BeltLinear = namedtuple(
-    "BeltLinear", ["blocks", "border_col", "border_row", "jt", "jr", "lu", "piv", "sigma"]
-)
-
-#: One disk driven by a prescribed belt speed: the model parameters ``p`` (of a constant
-#: belt: the model's f and J read the belt speed from ``p[P_VB]``, set to v_b(t) at each
-#: call), v_b(t) as a
-#: piecewise quintic on a uniform grid (start ``t0``, spacing ``ds``; ``coef[j, k]`` is
-#: the coefficient of (t - t_k)^j on [t_k, t_k + ds]) and the weight ``r_scale`` of the
-#: motor's response r to the disk (beta; 0: none, as in the oracle).
-PrescribedBelt = namedtuple("PrescribedBelt", ["p", "t0", "ds", "coef", "r_scale"])
-
-
-@njit(inline="always", **JIT)
-def belt_speed(prob, t):
-    """(v_b, dv_b/dt) at t from the piecewise quintic."""
-    c = prob.coef
-    u = (t - prob.t0) / prob.ds
-    k = min(max(int(math.floor(u)), 0), c.shape[1] - 1)
-    s = t - (prob.t0 + k * prob.ds)
-    v = ((((c[5, k] * s + c[4, k]) * s + c[3, k]) * s + c[2, k]) * s + c[1, k]) * s + c[0, k]
-    dv = ((5.0 * c[5, k] * s + 4.0 * c[4, k]) * s + 3.0 * c[3, k]) * s + 2.0 * c[2, k]
-    dv = dv * s + c[1, k]
-    return v, dv
-
-
-def quintic(t, v):
-    """The C4 quintic interpolating spline through (t, v), as ``PrescribedBelt.coef``.
-
-    With a C1 cubic Hermite interpolant instead, a disk's controller resolved the jumps of
-    its second derivative at the grid points (554 instead of 299 steps per disk in the
-    spin-up of the two-disk test below).
-    """
-    from math import factorial
-
-    from scipy.interpolate import make_interp_spline
-
-    spl = make_interp_spline(t, v, k=5)
-    left = t[:-1]
-    return np.ascontiguousarray(np.stack([spl(left, nu=j) / factorial(j) for j in range(6)]))
-
-
-@njit(inline="always", **JIT)
-def _belt_f(prob, z, out):
-    p = prob.p
-    vb, _ = belt_speed(prob, z[4])
-    p[P_VB] = vb
-    rhs(z, p, 1, False, out)  # the disk: the model's f on a belt at v_b(t)
-    out[4] = 1.0
-    drive_r = 0.0
-    if prob.r_scale != 0.0:  # the oracle needs no motor response
-        ts, _ = friction(z[1] - vb, z[3], p[P_EPS], p[P_ETAP])
-        drive_r = prob.r_scale * ts
-    out[5] = (drive_r - z[5]) / p[P_TB]
-
-
-@njit(inline="always", **JIT)
-def _belt_jac(prob, z, lin):
-    p = prob.p
-    vb, dvb = belt_speed(prob, z[4])
-    p[P_VB] = vb
-    jacobian_blocks(z, p, 1, False, lin.blocks, lin.border_col, lin.border_row)
-    J = lin.blocks[0]
-    # d f / d v_b = -(d f / d x') minus the damping terms, as the slip is x' - v_b
-    lin.jt[0] = 0.0
-    lin.jt[1] = (-J[1, 1] - p[P_C]) * dvb
-    lin.jt[2] = 0.0
-    lin.jt[3] = (-J[3, 1] - p[P_C12] / p[P_M]) * dvb
-    for j in range(5):
-        lin.jr[j] = 0.0
-    if prob.r_scale != 0.0:
-        _, _, t_v, t_w, _, _ = friction_partials(z[1] - vb, z[3], p[P_EPS], p[P_ETAP])
-        e = prob.r_scale / p[P_TB]
-        lin.jr[1] = e * t_v
-        lin.jr[3] = e * t_w
-        lin.jr[4] = -e * t_v * dvb
-
-
-@njit(inline="always", **JIT)
-def _belt_solve(prob, lin, b):
-    """Solve W x = b in place, W = sigma I - J block triangular (t first, then the disk, r)."""
-    sig = lin.sigma[0]
-    xt = b[4] / sig
-    for i in range(4):
-        b[i] += lin.jt[i] * xt
-    lu_solve(lin.lu, lin.piv, b, 0, 4)
-    b[4] = xt
-    acc = b[5]
-    for j in range(5):
-        acc += lin.jr[j] * b[j]
-    b[5] = acc / (sig + 1.0 / prob.p[P_TB])  # d r' / d r = -1 / T_b
-
-
-@njit(inline="always", **JIT)
-def _belt_factor(lin, sigma):
-    lin.sigma[0] = sigma
-    return dense_w_factor(sigma, lin.blocks[0], lin.lu, lin.piv)
-
-
-def _is_belt(typ) -> bool:
-    return isinstance(typ, types.BaseNamedTuple) and typ.instance_class is PrescribedBelt
-
-
-@overload(problems.problem_f, **OVERLOAD)
-def _f(prob, y, out):
-    if _is_belt(prob):
-        return lambda prob, y, out: _belt_f(prob, y, out)
-
-
-@overload(problems.problem_jac, **OVERLOAD)
-def _jac(prob, y, lin):
-    if _is_belt(prob):
-        return lambda prob, y, lin: _belt_jac(prob, y, lin)
-
-
-@overload(problems.problem_factor, **OVERLOAD)
-def _factor(prob, lin, sigma):
-    if _is_belt(prob):
-        return lambda prob, lin, sigma: _belt_factor(lin, sigma)
-
-
-@overload(problems.problem_solve, **OVERLOAD)
-def _solve(prob, lin, b):
-    if _is_belt(prob):
-        return lambda prob, lin, b: _belt_solve(prob, lin, b)
-
-
-@njit(**ENTRY)
-def integrate_disks(p, z, t0, ds, coef, r_scale, h_win, sample_dt, samples, rtol, atol, steps):
-    """Integrate every disk ``z[i]`` (in place, shape (N, 6)) over [t0, t0 + h_win].
-
-    Each disk on its own Rodas5P driver run against the belt speed of the grid.
-    ``samples[i]`` receives disk i's state every ``sample_dt`` from the window
-    start; ``steps[i]`` += (accepted, rejected). Returns the worst status code.
-    """
-    n_disk = z.shape[0]
-    lin = BeltLinear(
-        np.zeros((1, 4, 4)), np.zeros((1, 4)), np.zeros((1, 4)), np.zeros(4), np.zeros(5),
-        np.zeros((4, 4)), np.zeros(4, dtype=np.int64), np.zeros(1),
-    )  # fmt: skip
-    ws = alloc_workspace(RODAS5P_METHOD, N_STATE)
-    prob = PrescribedBelt(p.copy(), t0, ds, coef, r_scale)
-    abort = np.zeros(1, dtype=np.int64)
-    istat = np.zeros(2, dtype=np.int64)
-    fstat = np.zeros(1)
-    worst = 0
-    for i in range(n_disk):
-        obs = PoincareObserver(
-            Section(1, True), 0.0, np.empty((0, N_STATE)), np.empty(0), samples[i],
-            sample_dt, np.empty(N_STATE), np.empty(N_STATE), np.zeros(2, dtype=np.int64),
-        )  # fmt: skip
-        y = z[i]
-        st = drive(
-            RODAS5P_METHOD, prob, lin, ws, y, h_win, Controls(rtol, atol, 0.0, 10_000_000),
-            obs, simple_stop(STOP_AT_END, 0, N_STATE), abort, istat, fstat,
-        )  # fmt: skip
-        for k in range(obs.counts[1], samples.shape[1]):  # a last sample at t_end lost to rounding
-            for j in range(N_STATE):
-                samples[i, k, j] = y[j]
-        steps[i, 0] += istat[0]
-        steps[i, 1] += istat[1]
-        worst = max(worst, st)
-    return worst
-
-
-@njit(**ENTRY)
-def force_of_disks(samples, vb, eps, etap):
-    """S at each grid point from per-disk samples (N, k, 6), at the belt speed ``vb`` they saw."""
-    out = np.zeros(samples.shape[1])
-    for i in range(samples.shape[0]):
-        for k in range(samples.shape[1]):
-            v = samples[i, k, 1] - vb[k]
-            out[k] += v * friction_factor(v, samples[i, k, 3], eps, etap)
-    return out
 
 
 # ----------------------------------------------------------------------- the runs
@@ -378,8 +170,8 @@ def relaxation(system, y0, t_end, window, ds, rtol, atol, max_passes=30):
 
     Each pass integrates every disk over the window against the v_b(t) of the last
     pass (the first guess: the tangent at the window start), then recomputes v_b on
-    the grid from the motor equation and the disks' quadratures. The window is done
-    when v_b moved by at most atol + rtol |v_b| at every grid point.
+    the grid from the motor equation and the disks' motor responses. The window is
+    done when v_b moved by at most atol + rtol |v_b| at every grid point.
     """
     n = system.n_oscillators
     p = system.to_array()
@@ -417,8 +209,7 @@ def relaxation(system, y0, t_end, window, ds, rtol, atol, max_passes=30):
                 vb_new = decay * (vb_now - vb0) + vb0 + samples[:, :, 5].mean(axis=0)
                 change = float(np.max(np.abs(vb_new - vb)))
                 history[-1].append(change / tol)
-                force = force_of_disks(samples, vb, eps, etap)
-                vb = vb_new
+                vb_seen, vb = vb, vb_new
                 if change <= tol:
                     break
             else:
@@ -429,7 +220,8 @@ def relaxation(system, y0, t_end, window, ds, rtol, atol, max_passes=30):
             out_samples[:, lo : lo + per_win + 1] = samples
             vb_all[lo : lo + per_win + 1] = vb
             vb_now = float(vb[-1])
-            dvb_now = (vb0 - vb_now + beta / n * force[-1]) / tb
+            force = force_of_disks(samples[:, -1:], vb_seen[-1:], eps, etap)[0]
+            dvb_now = (vb0 - vb_now + beta / n * force) / tb
         return dict(passes=passes, stalls=stalls, status=worst, steps=steps,
                     samples=out_samples, vb=vb_all, history=history)  # fmt: skip
 

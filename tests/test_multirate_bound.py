@@ -1,4 +1,5 @@
-"""benchmarks/multirate_bound.py: its one-disk problem and its relaxation compute the model.
+"""benchmarks/multirate_bound.py: its one-disk problem (multirate_disk.py) and its relaxation
+compute the model.
 
 Run in a subprocess with a cache folder of its own: the driver's Numba cache index
 records the benchmark's problem record, a type from outside the package.
@@ -19,6 +20,7 @@ SCRIPT = textwrap.dedent(
     import numpy as np
     import stickslip_fast as ssf
     from benchmarks import multirate_bound as mb
+    from benchmarks import multirate_disk as md
 
     # 1. v_b constant: one disk of the benchmark is a constant-belt simulate
     one = ssf.System.preset("asymmetric", n_oscillators=1)
@@ -26,12 +28,12 @@ SCRIPT = textwrap.dedent(
     y0 = np.array([1e-3, 0.0, -5e-4, 0.0])
     t_end, ds = 40.0, 0.01
     grid = np.arange(int(round(t_end / ds)) + 1) * ds
-    coef = mb.quintic(grid, np.full(grid.size, one.vb))
-    z = np.zeros((1, mb.N_STATE))
+    coef = md.quintic(grid, np.full(grid.size, one.vb))
+    z = np.zeros((1, md.N_STATE))
     z[0, :4] = y0
     steps = np.zeros((1, 2), dtype=np.int64)
-    st = mb.integrate_disks(p, z, 0.0, ds, coef, 0.0, t_end, t_end,
-                            np.empty((1, 2, mb.N_STATE)), 1e-10, 1e-13, steps)
+    st = md.integrate_disks(p, z, 0.0, ds, coef, 0.0, t_end, t_end,
+                            np.empty((1, 2, md.N_STATE)), 1e-10, 1e-13, steps)
     ref = ssf.simulate(one, t_end, y0=y0, rtol=1e-10, atol=1e-13, max_points=10)
     out = dict(status=int(st), t=float(z[0, 4]),
                constant_belt_error=float(np.max(np.abs(z[0, :4] - ref.final_state))))
