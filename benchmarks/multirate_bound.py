@@ -70,7 +70,6 @@ Results: ``benchmarks/results/multirate_bound.json`` (or ``--out``).
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import math
 import os
@@ -88,14 +87,9 @@ from benchmarks.multirate_disk import N_STATE, force_of_disks, integrate_disks, 
 from stickslip_fast.model.params import P_BETA, P_EPS, P_ETAP, P_TB, P_VB0
 
 RESULTS = Path(__file__).resolve().parent / "results"
-# Numba keys a cached kernel on its own file only: the driver compiled for the record of
-# multirate_disk.py would not see an edit of it, so the folder is per source
-CACHE = Path(tempfile.gettempdir()) / (
-    "stickslip_fast_multirate_bound_"
-    + hashlib.sha1(
-        (Path(__file__).parent / "multirate_disk.py").read_bytes() + Path(__file__).read_bytes()
-    ).hexdigest()[:12]
-)
+# the driver's cache index would name the benchmark's problem record: keep it out of the
+# package's own cache folders
+CACHE = Path(tempfile.gettempdir()) / "stickslip_fast_multirate_bound"
 
 
 # ----------------------------------------------------------------------- the runs
