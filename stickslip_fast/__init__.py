@@ -17,7 +17,7 @@ from .base import cache_index as _cache_index
 from .base import compile_gc as _compile_gc
 
 _cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
-_cache_index.install()  # an index naming a type that is gone is a cache miss, not a crash
+_cache_index.install()  # records from outside the package: no stale kernel, no failed index
 _compile_gc.install()  # no full garbage collections during a Numba compile
 
 # ruff: noqa: E402
