@@ -113,6 +113,17 @@ def best_time(fn, max_repeats: int = 3, budget: float = 1.0):
     return best, res
 
 
+def desynchronised_start(n: int):
+    """``n_scaling``'s start: N disks of the asymmetric set on one DC motor, x_i and phi_i
+    offset uniformly in +-1e-3 (seed 12345), velocities and v_b zero. Returns (system, y0)."""
+    system = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=n)
+    y0 = np.zeros(system.n_state)
+    offs = np.random.default_rng(12345).uniform(-1e-3, 1e-3, size=(n, 4))
+    offs[:, [1, 3]] *= 0.0  # offsets in the positions x_i, phi_i only
+    y0[: 4 * n] = offs.ravel()
+    return system, y0
+
+
 run_sweep = ssf.sweep
 SWEEP_IMPL = "stickslip_fast.analysis.sweep"
 

@@ -82,7 +82,7 @@ import numba
 import numpy as np
 
 import stickslip_fast as ssf
-from benchmarks.common import machine_info
+from benchmarks.common import best_time, desynchronised_start, machine_info
 from benchmarks.multirate_disk import N_STATE, force_of_disks, integrate_disks, quintic
 from stickslip_fast.model.params import P_BETA, P_EPS, P_ETAP, P_TB, P_VB0
 
@@ -97,27 +97,13 @@ def desynchronised(n: int, settle: float, rtol: float):
     """``n_scaling``'s start (the asymmetric set on a DC motor, x_i and phi_i offset by up to
     1e-3, v_b = 0), then ``settle`` time units of a monolithic run at ``rtol``: past the
     motor's spin-up, the disks in their stick-slip motion."""
-    system = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=n)
-    y0 = np.zeros(system.n_state)
-    rng = np.random.default_rng(12345)
-    offs = rng.uniform(-1e-3, 1e-3, size=(n, 4))
-    offs[:, [1, 3]] = 0.0
-    y0[: 4 * n] = offs.ravel()
+    system, y0 = desynchronised_start(n)
     if settle > 0.0:
         r = ssf.simulate(system, settle, 0.0, y0=y0, rtol=rtol, atol=1e-3 * rtol, max_points=10)
         if r.t_final != settle:
             raise RuntimeError(f"the settling run ended at t = {r.t_final}, not {settle}")
         y0 = r.final_state.copy()
     return system, y0
-
-
-def _best(fn, rounds):
-    best, out = math.inf, None
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def _disk_error(states_a, states_b, n):
@@ -230,7 +216,7 @@ def one_disk_attempt_ns(rtol, atol, rounds):
         return ssf.simulate(system, 300.0, 0.0, rtol=rtol, atol=atol, max_points=10)
 
     run()
-    wall, r = _best(run, max(rounds, 3))
+    wall, r = best_time(run, max(rounds, 3), math.inf)
     return wall / (r.n_steps + r.n_rejected) * 1e9
 
 
@@ -248,7 +234,7 @@ def measure(n, args, log, attempt_ns):
                             max_points=10)  # fmt: skip
 
     mono()
-    wall, res = _best(mono, args.rounds)
+    wall, res = best_time(mono, args.rounds, math.inf)
     m = row["monolithic"] = dict(
         wall=wall, steps=int(res.n_steps), rejected=int(res.n_rejected),
         error=_disk_error(mono(ds).y, ref.y, n),
@@ -259,7 +245,7 @@ def measure(n, args, log, attempt_ns):
     row["partition_rtol"] = prtol
     run = oracle(system, y0, ref, t_end, ds, prtol, 1e-3 * prtol)
     run()
-    wall, (st, steps, _) = _best(run, args.rounds)
+    wall, (st, steps, _) = best_time(run, args.rounds, math.inf)
     attempts = int(steps.sum())
     o = row["oracle"] = dict(
         wall=wall, status=int(st), steps_per_disk=float(steps[:, 0].mean()),
@@ -279,7 +265,7 @@ def measure(n, args, log, attempt_ns):
         f"({row['break_even_passes_at_floor']:.2f} at the floor)")  # fmt: skip
     if args.relaxation:
         wr = relaxation(system, y0, t_end, args.window, ds, prtol, 1e-3 * prtol)
-        wall, rec = _best(wr, 1)
+        wall, rec = best_time(wr, 1, math.inf)
         err = _disk_error(_samples_as_full(rec["samples"], n), ref.y, n)
         vb_err = float(np.max(np.abs(rec["vb"] - ref.y[:, 4 * n])))
         passes = np.asarray(rec["passes"])

@@ -14,7 +14,7 @@ import time
 import numba
 import numpy as np
 
-from .common import ROOT, SWEEP_IMPL, run_sweep, ssf
+from .common import ROOT, SWEEP_IMPL, desynchronised_start, run_sweep, ssf
 
 SWEEPS = {
     # Fig. 6: asymmetric set, constant belt, eta in [1, 10]
@@ -192,13 +192,9 @@ def _n_scaling_rows(mode, log, offsets: bool):
     for n in N_LIST[mode]:
         ssf.simulate(ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=n), 1.0)
     for n in N_LIST[mode]:
-        system = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=n)
-        y0 = np.zeros(system.n_state)
-        if offsets:
-            rng = np.random.default_rng(12345)
-            offs = rng.uniform(-1e-3, 1e-3, size=(n, 4))
-            offs[:, [1, 3]] *= 0.0  # offsets in the positions x_i, phi_i only
-            y0[: 4 * n] = offs.ravel()
+        system, y0 = desynchronised_start(n)
+        if not offsets:
+            y0[:] = 0.0
         t0 = time.perf_counter()
         res = ssf.simulate(system, t_end, 0.0, y0=y0, max_points=100)
         wall = time.perf_counter() - t0
