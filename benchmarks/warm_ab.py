@@ -2,7 +2,7 @@
 
 Each checkout runs in fresh processes with its own Numba cache (compiled before the
 timings), one thread, alternating checkout by checkout. Each process times, by its own
-CPU time, best of ``--best`` calls:
+CPU time (``--clock wall``: wall time), best of ``--best`` calls:
 
 - ``simulate`` with Rodas5P and with ``method="auto"``, asymmetric set, η = 2.0 and
   9.99, t_end 3000, points after 2000 (the README's call);
@@ -16,7 +16,7 @@ CPU time, best of ``--best`` calls:
 The report is the best over the processes per checkout, and the ratio of the last
 checkout to the first. Usage::
 
-    python -m benchmarks.warm_ab --root OLD --root NEW [--processes 3] [--out FILE]
+    python -m benchmarks.warm_ab --root OLD --root NEW [--processes 3] [--clock wall] [--out FILE]
 """
 
 from __future__ import annotations
@@ -40,13 +40,15 @@ import numpy as np
 numba.set_num_threads(1)
 import stickslip_fast as ssf
 
+clock = time.perf_counter if sys.argv[2] == "wall" else time.process_time
+
 def best(fn, n):
     fn()  # compiles (or loads) outside the timing
     b = float("inf")
     for _ in range(n):
-        t = time.process_time()
+        t = clock()
         fn()
-        b = min(b, time.process_time() - t)
+        b = min(b, clock() - t)
     return b
 
 n = int(sys.argv[1])
@@ -82,15 +84,16 @@ print(json.dumps(out))
 """
 
 
-def run(roots: list[Path], processes: int, best: int, log=print) -> dict:
-    """Best CPU seconds per workload for each checkout, over ``processes`` fresh processes."""
+def run(roots: list[Path], processes: int, best: int, log=print, clock: str = "cpu") -> dict:
+    """Best seconds (CPU, or ``clock="wall"``) per workload for each checkout, over
+    ``processes`` fresh processes."""
     per_root: dict[str, list[dict]] = {str(r): [] for r in roots}
     with tempfile.TemporaryDirectory(prefix="ssf-warm-ab-") as tmp:
         for k in range(processes):
             for i, root in enumerate(roots):
                 env = dict(os.environ, PYTHONPATH=str(root), NUMBA_NUM_THREADS="1",
                            NUMBA_CACHE_DIR=os.path.join(tmp, f"cache{i}"))  # fmt: skip
-                proc = subprocess.run([sys.executable, "-W", "ignore", "-c", _CHILD, str(best)],
+                proc = subprocess.run([sys.executable, "-W", "ignore", "-c", _CHILD, str(best), clock],
                                       env=env, cwd=root, capture_output=True, text=True)  # fmt: skip
                 if proc.returncode != 0:
                     raise RuntimeError(f"{root} failed:\n{proc.stderr[-3000:]}")
@@ -101,7 +104,7 @@ def run(roots: list[Path], processes: int, best: int, log=print) -> dict:
     bests = {r: {n: min(rec[n] for rec in recs) for n in recs[0]} for r, recs in per_root.items()}
     first, last = str(roots[0]), str(roots[-1])
     ratios = {n: bests[last][n] / bests[first][n] for n in bests[first]}
-    return dict(roots=[str(r) for r in roots], processes=processes, best_of=best,
+    return dict(roots=[str(r) for r in roots], processes=processes, best_of=best, clock=clock,
                 runs=per_root, best=bests, ratio_last_over_first=ratios)  # fmt: skip
 
 
@@ -110,10 +113,16 @@ def main(argv=None) -> int:
     ap.add_argument("--root", type=Path, action="append", help="a checkout (give two)")
     ap.add_argument("--processes", type=int, default=3, help="fresh processes per checkout")
     ap.add_argument("--best", type=int, default=15, help="calls per workload (best of)")
+    ap.add_argument(
+        "--clock",
+        choices=("cpu", "wall"),
+        default="cpu",
+        help="time each call by the process's CPU time (default) or wall time",
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "warm_ab.json")
     args = ap.parse_args(argv)
     roots = [r.resolve() for r in (args.root or [ROOT])]
-    result = dict(machine=machine_info(), **run(roots, args.processes, args.best))
+    result = dict(machine=machine_info(), **run(roots, args.processes, args.best, clock=args.clock))
     for name, ratio in result["ratio_last_over_first"].items():
         print(f"  {name:40s} {ratio:.3f}")
     write_result(args.out, result, print)

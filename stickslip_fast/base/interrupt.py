@@ -1,17 +1,35 @@
-"""Ctrl-C for compiled work: run a kernel in a worker thread, abort it through a flag.
+"""Ctrl-C for compiled work: abort a running kernel through a flag.
 
 A compiled call holds the main thread until it returns, so Python's SIGINT
 handler cannot run and Ctrl-C would wait for the whole computation (or, inside
 Numba's parallel region, surface as an opaque ``SystemError``). Every kernel
 therefore takes an ``abort`` flag (int64[1]) that its driver polls once a step.
-:func:`call_interruptible` runs the kernel (compiled with ``nogil=True``) in a
-worker thread while the main thread waits in short, interruptible joins; on
-Ctrl-C it sets the flag, waits for the kernel to stop (within one step of every
-trajectory in flight: well under a second) and re-raises ``KeyboardInterrupt``.
+:func:`call_interruptible` arranges for Ctrl-C to set the flag, then re-raises
+``KeyboardInterrupt`` once the kernel has stopped (within one step of every
+trajectory in flight: well under a second). Kernels are compiled ``nogil=True``.
+
+Two ways, the first whenever it applies:
+
+- **In the calling thread.** Python's own C-level signal handler writes the
+  signal's number to the *wakeup fd* (:func:`signal.set_wakeup_fd`) before any
+  Python code can run. During the call that fd is one end of a socket pair whose
+  other end a watcher thread reads (it sleeps in ``recv`` between calls); on
+  SIGINT it sets the flag. The kernel then returns, and Python's default handler
+  raises ``KeyboardInterrupt`` at once. This applies in the main thread when
+  SIGINT has Python's default handler and no one else holds the wakeup fd (an
+  asyncio loop with signal handlers does). It costs two system calls a call.
+- **In a worker thread** otherwise (the first way's conditions unmet): the
+  main thread waits in short, interruptible joins and sets the flag itself when
+  its handler raises. Starting the thread, and the kernel running on a core whose
+  caches the caller had warmed, cost ~0.1-0.25 ms a call (about 5 % of a
+  3 ms ``simulate``; docs/performance.md, "Ctrl-C without a worker thread").
 """
 
 from __future__ import annotations
 
+import os
+import signal
+import socket
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -27,13 +45,52 @@ def new_abort_flag() -> np.ndarray:
     return np.zeros(1, dtype=np.int64)
 
 
+class _SigintWatcher:
+    """A socket pair for the wakeup fd and a daemon thread that turns SIGINT into a flag."""
+
+    def __init__(self) -> None:
+        self.pid = os.getpid()
+        self.reader, self.writer = socket.socketpair()
+        self.writer.setblocking(False)  # set_wakeup_fd requires it
+        self.armed: np.ndarray | None = None  # the flag of the call in progress
+        thread = threading.Thread(target=self._watch, name="stickslip-sigint", daemon=True)
+        thread.start()
+
+    def _watch(self) -> None:
+        while True:
+            try:
+                data = self.reader.recv(64)
+            except OSError:
+                return
+            if not data:
+                return
+            flag = self.armed
+            if int(signal.SIGINT) in data and flag is not None:
+                flag[0] = 1
+
+
+_watcher: _SigintWatcher | None = None
+
+
+def _sigint_watcher() -> _SigintWatcher:
+    """This process's watcher (a forked child builds its own: threads do not survive a fork)."""
+    global _watcher
+    if _watcher is None or _watcher.pid != os.getpid():
+        if _watcher is not None:
+            _watcher.reader.close()
+            _watcher.writer.close()
+        _watcher = _SigintWatcher()
+    return _watcher
+
+
 def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray) -> Any:
     """Call ``kernel(*args, abort)`` so that Ctrl-C stops it within about a second.
 
     Parameters
     ----------
     kernel : callable
-        A compiled kernel whose last argument is the abort flag.
+        A compiled kernel whose last argument is the abort flag, or a Python
+        function that runs such kernels (and waits for them before it returns).
     *args
         Its other arguments.
     abort : ndarray of int64, shape (1,)
@@ -51,6 +108,23 @@ def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray
     if threading.current_thread() is not threading.main_thread():
         # signals only reach the main thread: nothing to wait for here
         return kernel(*args, abort)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        watcher = _sigint_watcher()
+        fd = watcher.writer.fileno()
+        previous = signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
+        if previous in (-1, fd):  # a wakeup fd left behind by an interrupted call is ours
+            watcher.armed = abort
+            try:
+                return kernel(*args, abort)
+            finally:
+                watcher.armed = None
+                signal.set_wakeup_fd(-1)
+        signal.set_wakeup_fd(previous)  # someone else's (an asyncio loop): keep it
+    return _call_in_worker(kernel, args, abort)
+
+
+def _call_in_worker(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) -> Any:
+    """Run the kernel in a worker thread; the main thread waits and sets the flag on Ctrl-C."""
     box: dict[str, Any] = {}
     threads = numba.get_num_threads()  # thread-local: hand the caller's setting on
 

@@ -1,0 +1,143 @@
+"""Ctrl-C into compiled work (base/interrupt.py): which way a call runs, and that SIGINT stops it.
+
+The end-to-end checks (a real SIGINT to a long simulate, sweep and CLI run in a
+child process) are in tests/test_kernel_rules.py; these check each of the two
+ways in this process, with a compiled loop that runs until its flag is set.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import threading
+import time
+
+import numba
+import numpy as np
+import pytest
+
+from stickslip_fast.base import interrupt
+from stickslip_fast.base.jit import poll_flag
+
+pytestmark = pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
+
+
+@numba.njit(nogil=True)
+def _spin_until_aborted(limit, abort):
+    """Count until the flag is set (or ``limit``, ~10 s here); the count."""
+    i = 0
+    while i < limit and poll_flag(abort) == 0:
+        i += 1
+    return i
+
+
+_LIMIT = 10**10
+
+
+@pytest.fixture
+def default_sigint():
+    """SIGINT with Python's default handler (a terminal's Ctrl-C), restored afterwards."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def _sigint_soon(delay: float = 0.3) -> threading.Timer:
+    timer = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+def _which_thread(abort):
+    return threading.get_ident()
+
+
+def test_default_handler_runs_the_kernel_in_the_calling_thread(default_sigint):
+    flag = interrupt.new_abort_flag()
+    assert interrupt.call_interruptible(_which_thread, abort=flag) == threading.get_ident()
+    # the wakeup fd is handed back: no one holds it afterwards
+    assert signal.set_wakeup_fd(-1) == -1
+
+
+def test_sigint_stops_a_kernel_in_the_calling_thread(default_sigint):
+    _spin_until_aborted(10, interrupt.new_abort_flag())  # compile before timing
+    flag = interrupt.new_abort_flag()
+    timer = _sigint_soon()
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.call_interruptible(_spin_until_aborted, _LIMIT, abort=flag)
+    timer.join()
+    assert flag[0] == 1  # the watcher set it: the loop ended on the flag, not the limit
+    assert time.perf_counter() - start < 5.0
+    assert signal.set_wakeup_fd(-1) == -1
+    # the next call runs normally
+    assert (
+        interrupt.call_interruptible(_spin_until_aborted, 1000, abort=interrupt.new_abort_flag())
+        == 1000
+    )
+
+
+def _raise_keyboard_interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def test_a_handler_of_the_users_runs_the_kernel_in_a_worker():
+    old = signal.signal(signal.SIGINT, _raise_keyboard_interrupt)
+    try:
+        flag = interrupt.new_abort_flag()
+        assert interrupt.call_interruptible(_which_thread, abort=flag) != threading.get_ident()
+        # and Ctrl-C still stops it, through the handler in the main thread
+        _spin_until_aborted(10, interrupt.new_abort_flag())
+        timer = _sigint_soon()
+        with pytest.raises(KeyboardInterrupt):
+            interrupt.call_interruptible(_spin_until_aborted, _LIMIT, abort=flag)
+        timer.join()
+        assert flag[0] == 1
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def test_someone_elses_wakeup_fd_is_left_alone(default_sigint):
+    # an asyncio loop with signal handlers holds the wakeup fd: the kernel then runs
+    # in a worker thread, and the fd is still theirs afterwards
+    reader, writer = socket.socketpair()
+    writer.setblocking(False)
+    try:
+        signal.set_wakeup_fd(writer.fileno())
+        flag = interrupt.new_abort_flag()
+        assert interrupt.call_interruptible(_which_thread, abort=flag) != threading.get_ident()
+        assert signal.set_wakeup_fd(-1) == writer.fileno()
+    finally:
+        signal.set_wakeup_fd(-1)
+        reader.close()
+        writer.close()
+
+
+def test_a_worker_thread_calls_the_kernel_directly():
+    out = {}
+
+    def worker():
+        out["ident"] = interrupt.call_interruptible(_which_thread, abort=interrupt.new_abort_flag())
+        out["mine"] = threading.get_ident()
+
+    t = threading.Thread(target=worker)
+    t.start()
+    t.join()
+    assert out["ident"] == out["mine"]
+
+
+def test_errors_reach_the_caller_either_way(default_sigint):
+    def broken(abort):
+        raise ValueError("bad field 'eta'")
+
+    with pytest.raises(ValueError, match="eta"):
+        interrupt.call_interruptible(broken, abort=interrupt.new_abort_flag())
+    old = signal.signal(signal.SIGINT, _raise_keyboard_interrupt)
+    try:
+        with pytest.raises(ValueError, match="eta"):
+            interrupt.call_interruptible(broken, abort=interrupt.new_abort_flag())
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert signal.set_wakeup_fd(-1) == -1
+    np.testing.assert_array_equal(interrupt.new_abort_flag(), [0])
