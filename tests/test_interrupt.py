@@ -78,6 +78,28 @@ def test_sigint_stops_a_kernel_in_the_calling_thread(default_sigint):
     )
 
 
+def test_a_nested_call_hands_the_watcher_back_to_the_outer_one(default_sigint):
+    _spin_until_aborted(10, interrupt.new_abort_flag())
+    inner_flag = interrupt.new_abort_flag()
+
+    def outer_kernel(abort):
+        # a short inner call, then the outer call's own long loop: Ctrl-C must still stop it
+        n = interrupt.call_interruptible(_spin_until_aborted, 1000, abort=inner_flag)
+        timer = _sigint_soon()
+        try:
+            return n + _spin_until_aborted(_LIMIT, abort)
+        finally:
+            timer.join()
+
+    outer_flag = interrupt.new_abort_flag()
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.call_interruptible(outer_kernel, abort=outer_flag)
+    assert outer_flag[0] == 1 and inner_flag[0] == 0
+    assert time.perf_counter() - start < 5.0
+    assert signal.set_wakeup_fd(-1) == -1
+
+
 def _raise_keyboard_interrupt(signum, frame):
     raise KeyboardInterrupt
 

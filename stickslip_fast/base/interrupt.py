@@ -112,13 +112,17 @@ def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray
         watcher = _sigint_watcher()
         fd = watcher.writer.fileno()
         previous = signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
-        if previous in (-1, fd):  # a wakeup fd left behind by an interrupted call is ours
+        if previous in (-1, fd):
+            # fd already ours: a call nested in another one (restored after it), or
+            # one left behind by an interrupted call (armed is None then)
+            outer = watcher.armed
             watcher.armed = abort
             try:
                 return kernel(*args, abort)
             finally:
-                watcher.armed = None
-                signal.set_wakeup_fd(-1)
+                watcher.armed = outer
+                if outer is None:
+                    signal.set_wakeup_fd(-1)
         signal.set_wakeup_fd(previous)  # someone else's (an asyncio loop): keep it
     return _call_in_worker(kernel, args, abort)
 
