@@ -118,6 +118,31 @@ def test_settings_are_frozen_typed_and_named():
         Settings(method="rodas5p")  # t_end has no default
 
 
+def test_resolve_keeps_records_apart_by_type_and_bits():
+    a = Settings.resolve("rodas5p", 10.0, 0.0, 1e-8)
+    # the same arguments, positional or by name: the same (immutable) record
+    assert Settings.resolve(t_end=10.0, rtol=1e-8, method="rodas5p") is a
+    # 0.0 and -0.0 compare equal but are different settings (a file's hash tells them apart)
+    neg = Settings.resolve("rodas5p", 10.0, -0.0, 1e-8)
+    assert neg is not a and str(neg.to_dict()["t_transient"]) == "-0.0"
+    assert str(a.to_dict()["t_transient"]) == "0.0"
+    # an int where a float was given: another record, equal in value
+    b = Settings.resolve("rodas5p", 10, 0.0, 1e-8)
+    assert b is not a and b == a
+    assert Settings.resolve("rodas5p", 10.0, 0.0, 1e-8, stop="converged") is not a
+    # bad input is refused every time, not remembered
+    for _ in range(2):
+        with pytest.raises(ValueError, match="rtol"):
+            Settings.resolve("rodas5p", 10.0, 0.0, -1.0)
+    # unhashable input is validated as before
+    with pytest.raises(ValueError, match="rtol"):
+        Settings.resolve("rodas5p", 10.0, 0.0, [1e-8])
+    # the store is bounded
+    for k in range(settings_mod._RESOLVED_MAX + 10):
+        Settings.resolve(t_end=10.0 + k)
+    assert len(settings_mod._RESOLVED) <= settings_mod._RESOLVED_MAX
+
+
 def test_a_new_field_is_one_line_and_keeps_old_hashes():
     @dataclasses.dataclass(frozen=True, kw_only=True)
     class WithStop(Settings):

@@ -40,6 +40,12 @@ import numpy as np
 __all__ = ["new_abort_flag", "call_interruptible"]
 
 
+try:  # the C function: signal.getsignal's conversion to an enum costs ~2 us a call
+    from _signal import getsignal as _getsignal
+except ImportError:  # pragma: no cover - another Python implementation
+    _getsignal = signal.getsignal
+
+
 def new_abort_flag() -> np.ndarray:
     """A fresh, unset abort flag for one kernel call."""
     return np.zeros(1, dtype=np.int64)
@@ -108,7 +114,7 @@ def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray
     if threading.current_thread() is not threading.main_thread():
         # signals only reach the main thread: nothing to wait for here
         return kernel(*args, abort)
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+    if _getsignal(signal.SIGINT) is signal.default_int_handler:
         watcher = _sigint_watcher()
         fd = watcher.writer.fileno()
         previous = signal.set_wakeup_fd(fd, warn_on_full_buffer=False)

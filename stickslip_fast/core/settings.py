@@ -175,6 +175,19 @@ def _field(default: Any, check: Callable[[str, Any], Any], *, new: bool = False)
 _REQUIRED = dataclasses.MISSING
 
 
+def _exact(value: Any) -> tuple:
+    """A key that tells apart what ``==`` does not: the type, and a float's bits."""
+    if isinstance(value, float):
+        return (type(value), float(value).hex())
+    hash(value)  # TypeError for an unhashable value
+    return (type(value), value)
+
+
+#: Records built by :meth:`Settings.resolve`, by their exact arguments.
+_RESOLVED: dict[tuple, Settings] = {}
+_RESOLVED_MAX = 512
+
+
 # ---------------------------------------------------------------- the record
 @dataclass(frozen=True, kw_only=True)
 class Settings:
@@ -255,7 +268,34 @@ class Settings:
         :func:`period_tolerance` of ``rtol``; with a fixed step ``h``,
         ``max_steps`` is the number of steps to ``t_end`` plus one.
         ``extra`` are further fields (``None`` again means the default).
+
+        The record is immutable, so the same arguments give the same record: it
+        is kept (up to ``_RESOLVED_MAX`` of them) and validated once. Its key holds
+        each argument's type and a float's every bit (0.0 and -0.0 apart);
+        unhashable arguments are validated every time.
         """
+        args = (method, t_end, t_transient, rtol, atol, h, max_points, max_steps,
+                equilibrium_tol, period_tol)  # fmt: skip
+        try:
+            extras = tuple(sorted((k, _exact(v)) for k, v in extra.items()))
+            key = (cls, tuple(map(_exact, args)), extras)
+            hit = _RESOLVED.get(key)
+        except TypeError:  # an unhashable argument (an array, a list)
+            return cls._build(*args, **extra)
+        if hit is None:
+            hit = cls._build(*args, **extra)
+            if len(_RESOLVED) >= _RESOLVED_MAX:
+                _RESOLVED.clear()
+            _RESOLVED[key] = hit
+        return hit
+
+    @classmethod
+    def _build(
+        cls, method: str, t_end: float | None, t_transient: float, rtol: float | None,
+        atol: float | None, h: float | None, max_points: int, max_steps: int | None,
+        equilibrium_tol: float, period_tol: float | None, **extra: Any,
+    ) -> Settings:  # fmt: skip
+        """:meth:`resolve` without the kept records."""
         if t_end is None:
             raise ValueError("t_end is required")
         if method not in METHODS:  # before h, so a wrong name is reported as such
