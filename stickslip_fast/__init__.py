@@ -15,10 +15,12 @@ from __future__ import annotations
 from .base import cache_guard as _cache_guard
 from .base import cache_index as _cache_index
 from .base import compile_gc as _compile_gc
+from .base import compile_notice as _compile_notice
 
 _cache_guard.check()  # before any kernel runs: drop kernels compiled from other sources
 _cache_index.install()  # records from outside the package: no stale kernel, no failed index
 _compile_gc.install()  # no full garbage collections during a Numba compile
+_compile_notice.install()  # a line on the terminal while a kernel compiles for long
 
 # ruff: noqa: E402
 from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error

@@ -289,6 +289,10 @@ def main(argv: list[str] | None = None) -> int:
     import warnings
 
     warnings.showwarning = _show_warning
+    if getattr(args, "quiet", False):
+        from ..base import compile_notice
+
+        compile_notice.set_enabled(False)
     try:
         return int(args.func(args) or 0)
     except (ConfigError, ValueError, ImportError) as exc:  # ImportError: a missing extra
