@@ -1,7 +1,7 @@
 """A corpus of random runs for the classification tests (issue 26).
 
-Each case is a random (drive, N, eta, start) of the asymmetric set. A case is
-run twice through the sweep kernels: with the documented defaults (only
+Each case is a random (drive, N, eta, start) of a parameter set (the asymmetric one
+unless ``preset`` says another). A case is run twice through the sweep kernels: with the documented defaults (only
 ``t_end`` given) and *settled* (3x longer, points and rest judged on the last
 third). :func:`compare` lists the cases whose status or period differ.
 """
@@ -21,8 +21,8 @@ SETTLED = {"t_end": 9000.0, "t_transient": 6000.0}
 DRIVES = ("constant", "dc-motor")
 
 
-def system_of(drive: str, n_osc: int) -> ssf.System:
-    return ssf.System.preset("asymmetric", drive=drive, n_oscillators=n_osc)
+def system_of(drive: str, n_osc: int, preset: str = "asymmetric") -> ssf.System:
+    return ssf.System.preset(preset, drive=drive, n_oscillators=n_osc)
 
 
 def start_of(system: ssf.System, eta: float, u: np.ndarray) -> np.ndarray:
@@ -31,7 +31,9 @@ def start_of(system: ssf.System, eta: float, u: np.ndarray) -> np.ndarray:
     return box[:, 0] + u[: system.n_state] * (box[:, 1] - box[:, 0])
 
 
-def random_cases(n: int, seed: int) -> list[tuple[str, int, float, np.ndarray]]:
+def random_cases(
+    n: int, seed: int, preset: str = "asymmetric"
+) -> list[tuple[str, int, float, np.ndarray]]:
     """``n`` cases (drive, N, eta, start); a fifth of them from the zero state."""
     rng = np.random.default_rng(seed)
     cases = []
@@ -39,14 +41,14 @@ def random_cases(n: int, seed: int) -> list[tuple[str, int, float, np.ndarray]]:
         drive = DRIVES[int(rng.integers(2))]
         n_osc = int(rng.integers(1, 3))
         eta = float(rng.uniform(1.0, 10.0))
-        system = system_of(drive, n_osc)
+        system = system_of(drive, n_osc, preset)
         u = rng.random(9)
         y0 = system.initial_state(None) if rng.random() < 0.2 else start_of(system, eta, u)
         cases.append((drive, n_osc, eta, y0))
     return cases
 
 
-def run(cases, **settings) -> list[tuple[str, int]]:
+def run(cases, preset: str = "asymmetric", **settings) -> list[tuple[str, int]]:
     """(status, period) of every case, the cases of one (drive, N) in one parallel chunk."""
     out: list[tuple[str, int] | None] = [None] * len(cases)
     s = Settings.resolve(**settings)
@@ -57,15 +59,16 @@ def run(cases, **settings) -> list[tuple[str, int]]:
                 continue
             etas = np.array([[cases[k][2]] for k in idx])
             y0s = np.array([cases[k][3] for k in idx])
-            res = compute_restart_chunk(system_of(drive, n_osc), ("eta",), etas, y0s, s)
+            system = system_of(drive, n_osc, preset)
+            res = compute_restart_chunk(system, ("eta",), etas, y0s, s)
             for j, k in enumerate(idx):
                 out[k] = (STATUS_NAMES[int(res["status"][j])], int(res["period"][j]))
     return out  # type: ignore[return-value]
 
 
-def compare(cases) -> tuple[list, list, list]:
+def compare(cases, preset: str = "asymmetric") -> tuple[list, list, list]:
     """(default labels, settled labels, indices of the cases that disagree)."""
-    default = run(cases, t_end=T_END)
-    settled = run(cases, **SETTLED)
+    default = run(cases, preset, t_end=T_END)
+    settled = run(cases, preset, **SETTLED)
     diff = [k for k in range(len(cases)) if default[k] != settled[k]]
     return default, settled, diff
