@@ -9,6 +9,7 @@ import time
 import pytest
 from numba import njit
 from numba.core import event
+from numba.core.errors import TypingError
 
 import stickslip_fast  # noqa: F401 - installs the listener
 from stickslip_fast.base import compile_notice
@@ -71,6 +72,27 @@ def test_long_compile_writes_two_lines_and_logs(rule, caplog):
         "compiled the trajectory kernel (integrate)"
     ]
     assert lis.depth == 0 and lis.timer is None
+
+
+def test_a_failed_compile_says_it_stopped(rule, caplog):
+    compile_notice.set_enabled(True)
+    term = _Terminal()
+    lis = compile_notice.CompileNotice(stream=term, delay=0.0)
+    with caplog.at_level(logging.INFO, logger="stickslip_fast.compile"):
+        lis.on_start(_ev(START))
+        lis.timer.join(5.0)
+        failed = event.Event(
+            compile_notice.EVENT, END, data=_ev(END).data,
+            exc_details=(KeyboardInterrupt, KeyboardInterrupt(), None),
+        )  # fmt: skip
+        lis.on_end(failed)
+    lines = term.getvalue().splitlines()
+    assert len(lines) == 2
+    assert lines[1].startswith(
+        "stickslip_fast: compiling the trajectory kernel (integrate) stopped after "
+    )
+    assert lines[1].endswith(" s")  # and no claim that anything was cached
+    assert caplog.records[0].getMessage().startswith("compiling the trajectory kernel")
 
 
 def test_short_compile_is_silent_but_logged(rule, caplog):
@@ -183,12 +205,21 @@ def test_a_real_compile_through_numba(rule, monkeypatch):
         assert njit(cache=False)(mine)(1.0) == 3.0
         assert term.getvalue() == ""
         assert njit(cache=False)(package_like)(1.0) == 2.0
+
+        def fails(x):
+            return x.no_such_attribute
+
+        fails.__module__, fails.__qualname__ = "stickslip_fast.probe", "fails"
+        with pytest.raises(TypingError):
+            njit(cache=False)(fails)(1.0)
     finally:
         event.unregister(compile_notice.EVENT, slow)
     lines = term.getvalue().splitlines()
     assert lines[0] == "stickslip_fast: compiling package_like, first use only ..."
     assert lines[1].startswith("stickslip_fast: compiled package_like in ")
-    assert len(lines) == 2
+    assert lines[2] == "stickslip_fast: compiling fails, first use only ..."
+    assert lines[3].startswith("stickslip_fast: compiling fails stopped after ")
+    assert len(lines) == 4
 
 
 def test_cli_quiet_turns_the_lines_off(rule, tmp_path):

@@ -10,7 +10,8 @@ this package's functions and lasts longer than :data:`DELAY_S`, a timer thread w
     stickslip_fast: compiling the trajectory kernel (integrate), first use only ...
 
 and the end of the compile adds ``stickslip_fast: compiled the trajectory kernel
-(integrate) in 14.2 s; cached for later runs``. The lines go through ``tqdm.write``,
+(integrate) in 14.2 s; cached for later runs`` (or ``... stopped after 3.1 s`` when the
+compile fails or is interrupted). The lines go through ``tqdm.write``,
 which lifts a progress bar above them. Short compiles (an entry twin, a small helper)
 write nothing.
 
@@ -145,7 +146,7 @@ class CompileNotice(event.Listener):
                 self._stream(),
             )
 
-    def on_end(self, ev: event.Event) -> None:  # noqa: ARG002 - also after a failed compile
+    def on_end(self, ev: event.Event) -> None:  # also after a failed compile
         self.depth = max(self.depth - 1, 0)
         if self.depth or self.name is None:
             return
@@ -156,12 +157,18 @@ class CompileNotice(event.Listener):
             name, self.name = self.name, None
         if timer is not None:
             timer.cancel()
+        # an error, or Ctrl-C, which raises next. Numba 0.68's Event.is_failed reads the
+        # other way round, so the event's exception is looked at (None when it is renamed:
+        # then a failed compile is reported as compiled, nothing worse)
+        failed = getattr(ev, "_exc_details", None) is not None
+        if failed:
+            line = f"compiling {name} stopped after {seconds:.1f} s"
+        else:
+            line = f"compiled {name} in {seconds:.1f} s"
         if shown:
-            _write(
-                f"{PACKAGE}: compiled {name} in {seconds:.1f} s; cached for later runs",
-                self._stream(),
-            )
-        LOGGER.info("compiled %s in %.2f s", name, seconds)
+            tail = "" if failed else "; cached for later runs"
+            _write(f"{PACKAGE}: {line}{tail}", self._stream())
+        LOGGER.info(line)
 
 
 _LISTENER: CompileNotice | None = None
