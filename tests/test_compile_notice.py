@@ -48,15 +48,20 @@ def rule():
     compile_notice.set_enabled(None)
 
 
+def _listener(delay):
+    """A listener that writes (switch on) to a terminal of its own."""
+    compile_notice.set_enabled(True)
+    term = _Terminal()
+    return term, compile_notice.CompileNotice(stream=term, delay=delay)
+
+
 def test_installed_on_import():
     assert compile_notice.installed()
     assert compile_notice.install() and compile_notice.installed()  # once is enough
 
 
 def test_long_compile_writes_two_lines_and_logs(rule, caplog):
-    compile_notice.set_enabled(True)
-    term = _Terminal()
-    lis = compile_notice.CompileNotice(stream=term, delay=0.0)
+    term, lis = _listener(0.0)
     with caplog.at_level(logging.INFO, logger="stickslip_fast.compile"):
         lis.on_start(_ev(START))
         lis.timer.join(5.0)  # the line is written while the compile runs
@@ -75,9 +80,7 @@ def test_long_compile_writes_two_lines_and_logs(rule, caplog):
 
 
 def test_a_failed_compile_says_it_stopped(rule, caplog):
-    compile_notice.set_enabled(True)
-    term = _Terminal()
-    lis = compile_notice.CompileNotice(stream=term, delay=0.0)
+    term, lis = _listener(0.0)
     with caplog.at_level(logging.INFO, logger="stickslip_fast.compile"):
         lis.on_start(_ev(START))
         lis.timer.join(5.0)
@@ -96,9 +99,7 @@ def test_a_failed_compile_says_it_stopped(rule, caplog):
 
 
 def test_short_compile_is_silent_but_logged(rule, caplog):
-    compile_notice.set_enabled(True)
-    term = _Terminal()
-    lis = compile_notice.CompileNotice(stream=term, delay=30.0)
+    term, lis = _listener(30.0)
     with caplog.at_level(logging.INFO, logger="stickslip_fast.compile"):
         lis.on_start(_ev(START, name="_lane_values"))
         timer = lis.timer
@@ -112,9 +113,7 @@ def test_short_compile_is_silent_but_logged(rule, caplog):
 
 
 def test_other_modules_and_nested_compiles(rule, caplog):
-    compile_notice.set_enabled(True)
-    term = _Terminal()
-    lis = compile_notice.CompileNotice(stream=term, delay=0.0)
+    term, lis = _listener(0.0)
     with caplog.at_level(logging.INFO, logger="stickslip_fast.compile"):
         # a user's function (which may compile the package's inside): nothing
         lis.on_start(_ev(START, module="my_project.model", name="f"))
@@ -140,9 +139,7 @@ def test_other_modules_and_nested_compiles(rule, caplog):
 
 
 def test_a_stale_timer_writes_nothing(rule):
-    compile_notice.set_enabled(True)
-    term = _Terminal()
-    lis = compile_notice.CompileNotice(stream=term, delay=30.0)
+    term, lis = _listener(30.0)
     lis.on_start(_ev(START))
     lis._show()  # not the compile's own timer thread (one left from an earlier compile)
     assert term.getvalue() == ""
