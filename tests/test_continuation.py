@@ -266,6 +266,17 @@ def test_branch_reaches_the_issue_value_at_eta_3_30(branch):
     assert abs(o3.multipliers[0] - (-0.171)) < 1e-3
 
 
+def test_orbit_branch_progress_bar_counts_its_points(branch, capsys):
+    o, br = branch
+    shown = continue_orbit(o, "eta", (1.9, 2.1), ds=0.02, ds_max=0.05, max_points=30,
+                           progress=True)  # fmt: skip
+    err = capsys.readouterr().err
+    n = len(shown.values)
+    assert "continue_orbit eta" in err and f"{n}/{n} [" in err
+    assert f"eta={shown.values[-1]:.10g}" in err
+    np.testing.assert_array_equal(shown.points, br.points)  # the same branch
+
+
 def test_cli_continue_writes_the_api_branch_and_info_reads_it(branch, tmp_path, capsys):
     from stickslip_fast.bifurcation.continuation import Branch
     from stickslip_fast.cli import main

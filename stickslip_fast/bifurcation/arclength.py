@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from .detection import _sorted_eigs, _tests
+from .progress import walk_reporter
 
 #: A branch ends with status "precision-limit" where its last this many steps together
 #: advance less than the ``ds_min`` given (possible only in the tighter stages).
@@ -206,30 +207,33 @@ def pseudo_arclength(
     stall_ds = ds_min if stall_ds_min is None else stall_ds_min
     lo, hi = bounds
     status = "max-points"
-    while len(walk.xs) < max_points:
-        x = walk.xs[-1]
-        trial, walk.ds = _try_steps(walk.evaluate, x, walk.t, walk.ds, walk.ds_min, (lo, hi),
-                                    walk.tol, max_corrector, jump)  # fmt: skip
-        if not trial.accepted:
-            # a step that jumped off the branch ends it; a sharp end may go on, tighter
-            if not trial.jumped and walk.next_stage(max_corrector):
-                continue
-            status = "nonsmooth" if trial.jumped else "step-too-small"
-            if trial.floored:  # the residual's noise, not the step, stopped the corrector
+    with walk_reporter() as report:  # the progress bar, if one is shown
+        while len(walk.xs) < max_points:
+            x = walk.xs[-1]
+            trial, walk.ds = _try_steps(walk.evaluate, x, walk.t, walk.ds, walk.ds_min,
+                                        (lo, hi), walk.tol, max_corrector, jump)  # fmt: skip
+            if not trial.accepted:
+                # a step that jumped off the branch ends it; a sharp end may go on, tighter
+                if not trial.jumped and walk.next_stage(max_corrector):
+                    continue
+                status = "nonsmooth" if trial.jumped else "step-too-small"
+                if trial.floored:  # the residual's noise, not the step, stopped the corrector
+                    status = "precision-limit"
+                break
+            walk.accept(x, trial.x_new, trial.data, locate_tol)
+            if report is not None:
+                report(trial.x_new)
+            if trial.on_bound:
+                status = "bounds"
+                break
+            if _stalled(walk.xs, stall_ds):  # the ds_min given: the stages lower walk.ds_min
                 status = "precision-limit"
-            break
-        walk.accept(x, trial.x_new, trial.data, locate_tol)
-        if trial.on_bound:
-            status = "bounds"
-            break
-        if _stalled(walk.xs, stall_ds):  # the ds_min given: the stages lower walk.ds_min
-            status = "precision-limit"
-            break
-        if trial.its <= 3:
-            walk.ds = min(walk.ds * 1.5, ds_max)
-        if stop is not None and stop(trial.x_new, trial.data[2], walk):
-            status = "stopped"
-            break
+                break
+            if trial.its <= 3:
+                walk.ds = min(walk.ds * 1.5, ds_max)
+            if stop is not None and stop(trial.x_new, trial.data[2], walk):
+                status = "stopped"
+                break
     return np.array(walk.xs), np.array(walk.mults), walk.bifs, status
 
 

@@ -25,6 +25,7 @@ from .detection import _sorted_eigs
 from .eqcurve import EQUILIBRIUM_CURVE_KINDS, continue_equilibrium_curve
 from .foldcurve import CURVE_KINDS, follow_curve
 from .nscurve import NS_KIND, follow_ns_curve
+from .progress import points_bar
 from .returnmap import SECTION_INDEX, return_map
 from .stickcurve import STICK_KIND, follow_stick_curve, nearest_stick_event
 from .stickphases import GRAZE_TOL, section_graze_margin, stick_phases
@@ -99,6 +100,65 @@ def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
     return base, periods
 
 
+#: :func:`continue_bifurcation`'s docstring (kept out of the function body, as for
+#: :func:`~stickslip_fast.continue_orbit`: the layout rule counts a function's lines).
+_CONTINUE_BIFURCATION_DOC = """Follow a fold, period-doubling or Neimark-Sacker point of
+periodic orbits, or a fold or Hopf point of equilibria, in a second parameter.
+
+A minimally augmented system whose borders are taken again where the null vectors
+have turned by 60 degrees (docs/orbits.md, "Borders along long curves").
+
+Parameters
+----------
+branch : Branch
+    An orbit branch from :func:`~stickslip_fast.continue_orbit`, or an equilibrium
+    branch from :func:`~stickslip_fast.continue_equilibrium` (``period == 0``).
+bifurcation : Bifurcation
+    One of ``branch.bifurcations``, of kind "fold", "period-doubling" or
+    "neimark-sacker" (orbits; :mod:`~stickslip_fast.bifurcation.nscurve`: the angle
+    theta of the multipliers e^{+-i theta} is an unknown, ``Curve.theta``), "fold"
+    or "hopf" (equilibria).
+param2 : str
+    A :class:`System` field other than ``branch.param``.
+bounds2 : (float, float)
+    The interval of ``param2``; it must contain the branch's value. The curve
+    ends on the first bound it reaches (status "bounds").
+direction : float
+    +1: start towards increasing ``param2``; -1: decreasing.
+ds, ds_min, ds_max, max_points, tol : float
+    Of the pseudo-arclength continuation in (section coordinates, param, param2)
+    (equilibria: (state, param, param2), and omega^2 before the parameters on a
+    Hopf curve); ``tol`` on the residual and the test functions together.
+rtol, atol, fd_step : float
+    Of the return map and its parameter sensitivities (:func:`continue_orbit`);
+    equilibria: ``fd_step`` of the central differences in the parameters.
+h : float
+    Step of the directional difference of the Jacobian (the test functions'
+    gradients; docs/orbits.md, "Two-parameter curves").
+lyap_step : float, optional
+    Equilibria, Hopf curves: step of the differences of the Jacobian in the
+    state for the first Lyapunov coefficient (the "bautin" test). Default
+    0.01 ``eps``: the friction law varies on the scale eps (at the DC motor's
+    Hopf point l1 = 1.2464e8 with steps 1e-6 to 1e-8, 1.8e9 with 1e-4).
+stick_events : bool
+    Orbit fold, period-doubling and NS curves: name a codim-2 point "stick-phase"
+    where the orbit's count of stick phases changes (located to 1e-8 in ``param2``).
+progress : bool, optional
+    Show a progress bar of the points, with both parameters' values (default: when
+    standard error is a terminal).
+
+Returns
+-------
+Curve
+
+Raises
+------
+ValueError
+    For a bifurcation of another kind, an unknown or equal ``param2``, or bounds
+    without the start (naming the argument).
+"""
+
+
 def continue_bifurcation(
     branch: Branch,
     bifurcation: Bifurcation,
@@ -117,68 +177,22 @@ def continue_bifurcation(
     h: float = 1e-7,
     lyap_step: float | None = None,
     stick_events: bool = True,
+    progress: bool | None = None,
 ) -> Curve:
-    """Follow a fold, period-doubling or Neimark-Sacker point of periodic orbits, or a fold
-    or Hopf point of equilibria, in a second parameter.
-
-    A minimally augmented system whose borders are taken again where the null vectors
-    have turned by 60 degrees (docs/orbits.md, "Borders along long curves").
-
-    Parameters
-    ----------
-    branch : Branch
-        An orbit branch from :func:`~stickslip_fast.continue_orbit`, or an equilibrium
-        branch from :func:`~stickslip_fast.continue_equilibrium` (``period == 0``).
-    bifurcation : Bifurcation
-        One of ``branch.bifurcations``, of kind "fold", "period-doubling" or
-        "neimark-sacker" (orbits; :mod:`~stickslip_fast.bifurcation.nscurve`: the angle
-        theta of the multipliers e^{+-i theta} is an unknown, ``Curve.theta``), "fold"
-        or "hopf" (equilibria).
-    param2 : str
-        A :class:`System` field other than ``branch.param``.
-    bounds2 : (float, float)
-        The interval of ``param2``; it must contain the branch's value. The curve
-        ends on the first bound it reaches (status "bounds").
-    direction : float
-        +1: start towards increasing ``param2``; -1: decreasing.
-    ds, ds_min, ds_max, max_points, tol : float
-        Of the pseudo-arclength continuation in (section coordinates, param, param2)
-        (equilibria: (state, param, param2), and omega^2 before the parameters on a
-        Hopf curve); ``tol`` on the residual and the test functions together.
-    rtol, atol, fd_step : float
-        Of the return map and its parameter sensitivities (:func:`continue_orbit`);
-        equilibria: ``fd_step`` of the central differences in the parameters.
-    h : float
-        Step of the directional difference of the Jacobian (the test functions'
-        gradients; docs/orbits.md, "Two-parameter curves").
-    lyap_step : float, optional
-        Equilibria, Hopf curves: step of the differences of the Jacobian in the
-        state for the first Lyapunov coefficient (the "bautin" test). Default
-        0.01 ``eps``: the friction law varies on the scale eps (at the DC motor's
-        Hopf point l1 = 1.2464e8 with steps 1e-6 to 1e-8, 1.8e9 with 1e-4).
-    stick_events : bool
-        Orbit fold, period-doubling and NS curves: name a codim-2 point "stick-phase"
-        where the orbit's count of stick phases changes (located to 1e-8 in ``param2``).
-
-    Returns
-    -------
-    Curve
-
-    Raises
-    ------
-    ValueError
-        For a bifurcation of another kind, an unknown or equal ``param2``, or bounds
-        without the start (naming the argument).
-    """
     kind, system0, lo, hi = _check(branch, bifurcation, param2, bounds2)
     settings = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol)
-    if branch.period == 0:
-        return continue_equilibrium_curve(branch, bifurcation, param2, (lo, hi), system0,
-                                          direction=direction, h=h, fd_step=fd_step,
-                                          lyap_step=lyap_step or 0.01 * system0.eps,
-                                          **settings)  # fmt: skip
-    return _orbit_curve(branch, bifurcation, param2, (lo, hi), system0, direction,
-                        (rtol, atol, fd_step, h), settings, stick_events)  # fmt: skip
+    names = [branch.param, param2]
+    with points_bar(progress, max_points, f"continue_bifurcation {kind}", names):
+        if branch.period == 0:
+            return continue_equilibrium_curve(branch, bifurcation, param2, (lo, hi), system0,
+                                              direction=direction, h=h, fd_step=fd_step,
+                                              lyap_step=lyap_step or 0.01 * system0.eps,
+                                              **settings)  # fmt: skip
+        return _orbit_curve(branch, bifurcation, param2, (lo, hi), system0, direction,
+                            (rtol, atol, fd_step, h), settings, stick_events)  # fmt: skip
+
+
+continue_bifurcation.__doc__ = _CONTINUE_BIFURCATION_DOC
 
 
 def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings,

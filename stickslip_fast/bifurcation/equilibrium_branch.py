@@ -14,6 +14,7 @@ from .orbits import (
     Equilibrium,
     _field,
 )
+from .progress import points_bar
 from .walk_args import _check_args, _difference
 
 
@@ -30,6 +31,7 @@ def continue_equilibrium(
     direction: float = 1.0,
     tol: float = 1e-12,
     fd_step: float = 1e-7,
+    progress: bool | None = None,
 ) -> Branch:
     """Continue an equilibrium (steady sliding, the stalled motor) in one parameter.
 
@@ -52,6 +54,8 @@ def continue_equilibrium(
     fd_step : float
         Relative step of the central difference df/dlambda (one-sided at the
         edge of the parameter's valid range, e.g. eta = 1 or 10).
+    progress : bool, optional
+        As for :func:`continue_orbit`.
 
     Returns
     -------
@@ -72,10 +76,12 @@ def continue_equilibrium(
                                max_points)  # fmt: skip
     evaluate = _equilibrium_residual(system0, param, fd_step)
     x0 = np.r_[equilibrium.state, lam0]
-    xs, eigs, bifs, status = pseudo_arclength(
-        evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
-        max_points=max_points, tol=tol, tests=_equilibrium_tests, spectrum=_eigs_by_real_part,
-    )  # fmt: skip
+    with points_bar(progress, max_points, f"continue_equilibrium {param}", [param]):
+        xs, eigs, bifs, status = pseudo_arclength(
+            evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
+            max_points=max_points, tol=tol, tests=_equilibrium_tests,
+            spectrum=_eigs_by_real_part,
+        )  # fmt: skip
     return Branch(
         system=system0,
         param=param,

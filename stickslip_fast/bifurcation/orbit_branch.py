@@ -21,6 +21,7 @@ from .orbits import (
     return_map,
     stick_phases,
 )
+from .progress import points_bar
 from .walk_args import WalkSettings, _check_args
 
 #: Tighter settings :func:`continue_orbit` goes on with, in turn, where the corrector fails
@@ -180,6 +181,9 @@ max_segments : int
     re-mesh; an integer >= ``segments``. The far ends of re-meshed branches
     stop where the cap is reached (μ ~ 1e36-1e48 at the default 64; 256
     reached μ = 6.2e178 at about 4x the cost per point; docs/orbits.md).
+progress : bool, optional
+    Show a progress bar of the points, with the parameter's value (default:
+    when standard error is a terminal).
 
 Returns
 -------
@@ -217,6 +221,7 @@ def continue_orbit(
     segments: int = DEFAULT_SEGMENTS,
     remesh: bool = False,
     max_segments: int = MAX_SEGMENTS,
+    progress: bool | None = None,
 ) -> Branch:
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
@@ -229,11 +234,12 @@ def continue_orbit(
                         rtol=rtol, atol=atol, fd_step=fd_step, stick_events=stick_events,
                         sharp_ends=sharp_ends)  # fmt: skip
     mesh_args = (int(segments), bool(remesh), int(max_segments))
-    if shooting == "multiple":
-        return _continue_multiple_from(orbit, param, (lo, hi), direction, mesh_args, walk)
-    branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, walk)
-    if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
-        branch = _go_on_multiple(branch, orbit, (lo, hi), mesh_args, walk, way_on)
+    with points_bar(progress, max_points, f"continue_orbit {param}", [param]):
+        if shooting == "multiple":
+            return _continue_multiple_from(orbit, param, (lo, hi), direction, mesh_args, walk)
+        branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, walk)
+        if shooting == "auto" and branch.status in ("step-too-small", "precision-limit"):
+            branch = _go_on_multiple(branch, orbit, (lo, hi), mesh_args, walk, way_on)
     return branch
 
 

@@ -34,6 +34,7 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     switch = c.pop("switch", False)
     curve = {k: c.pop(k) for k in ("param2", "bounds2", "direction2", "kinds2") if k in c}
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    c["progress"] = False if args.quiet else None  # a bar of the points in a terminal
     if start == "orbit":
         first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
     else:
@@ -74,7 +75,8 @@ def _curves(branch, curve, tol, stick_events, args, say):
         )
         c = continue_bifurcation(branch, bif, curve["param2"], curve["bounds2"],
                                  direction=curve.get("direction2", 1.0), tol=tol,
-                                 stick_events=stick_events)  # fmt: skip
+                                 stick_events=stick_events,
+                                 progress=False if args.quiet else None)  # fmt: skip
         path = out.with_name(f"{out.stem}.curve{k}{out.suffix or '.h5'}")
         c.to_hdf5(path)
         if not args.quiet:
