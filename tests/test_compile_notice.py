@@ -138,6 +138,24 @@ def test_other_modules_and_nested_compiles(rule, caplog):
     assert len(caplog.records) == 1
 
 
+def test_a_broken_terminal_never_breaks_the_compile(rule):
+    class Broken(_Terminal):
+        def write(self, text):
+            raise OSError("the terminal went away")
+
+    term = Broken()
+    lis = compile_notice.CompileNotice(stream=term, delay=0.0)
+    compile_notice.set_enabled(True)
+    lis.on_start(_ev(START))
+    lis.timer.join(5.0)
+    lis.on_end(_ev(END))  # no exception
+    assert lis.depth == 0 and lis.name is None and lis.timer is None
+    # and a failure inside the listener is swallowed too
+    lis.on_start(event.Event(compile_notice.EVENT, START, data=object()))
+    lis.on_end(_ev(END))
+    assert lis.depth == 0 and lis.name is None
+
+
 def test_a_stale_timer_writes_nothing(rule):
     term, lis = _listener(30.0)
     lis.on_start(_ev(START))

@@ -93,8 +93,8 @@ def _write(line: str, stream) -> None:
         from tqdm import tqdm
 
         tqdm.write(line, file=stream)
-    except ImportError:  # pragma: no cover - tqdm is a dependency
-        print(line, file=stream, flush=True)
+    except (OSError, ValueError):  # a closed or broken stream: the compile goes on
+        pass
 
 
 class CompileNotice(event.Listener):
@@ -125,6 +125,12 @@ class CompileNotice(event.Listener):
         self.depth += 1
         if self.depth > 1:
             return
+        try:
+            self._begin(ev)
+        except Exception:  # noqa: BLE001 - a notice must never break a compile
+            self.name = None
+
+    def _begin(self, ev: event.Event) -> None:
         self.name = _package_function(ev.data)
         if self.name is None:
             return
@@ -150,6 +156,12 @@ class CompileNotice(event.Listener):
         self.depth = max(self.depth - 1, 0)
         if self.depth or self.name is None:
             return
+        try:
+            self._finish(ev)
+        except Exception:  # noqa: BLE001 - a notice must never break a compile
+            self.name = self.timer = None
+
+    def _finish(self, ev: event.Event) -> None:
         seconds = time.perf_counter() - self.t0
         with self.lock:
             timer, self.timer = self.timer, None

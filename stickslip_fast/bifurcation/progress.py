@@ -58,8 +58,11 @@ def points_bar(
 
         def report(x: np.ndarray) -> None:
             values = ", ".join(f"{n}={v:.10g}" for n, v in zip(names, x[-k:], strict=True))
-            bar.set_postfix_str(values, refresh=False)
-            bar.update(1)
+            try:
+                bar.set_postfix_str(values, refresh=False)
+                bar.update(1)
+            except (OSError, ValueError):  # a closed or broken terminal: the walk goes on
+                pass
 
         token = _REPORTER.set(report)
         try:
