@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..base.messages import plain
+from ..base.terminal import show_progress
 from ..core.settings import Settings
 from ..io import CensusFile, CensusLayout
 from ..model.system import System
@@ -103,7 +103,7 @@ def _census_chunk_size(chunk_size, backend, runner, nthreads) -> int:
 def _census_bar(stack, progress, done, desc):
     """A progress bar over the pairs still to run (None when not shown)."""
     n_todo = int(done.size - done.sum())
-    show = sys.stderr.isatty() if progress is None else bool(progress)
+    show = show_progress(progress)
     bar = None
     if show and n_todo:
         from tqdm.auto import tqdm

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -31,6 +30,7 @@ from ..backends.local import (
     write_unit,
 )
 from ..base.messages import plain
+from ..base.terminal import show_progress
 from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
 from ..io import MemoryStore, SweepFile
 from ..model.system import System
@@ -91,7 +91,7 @@ def _progress_bar(stack: contextlib.ExitStack, progress, done: np.ndarray, names
     """A tqdm bar over all values (None when not shown or nothing is left)."""
     n_total = done.size
     n_todo = int(n_total - done.sum())
-    show = sys.stderr.isatty() if progress is None else bool(progress)
+    show = show_progress(progress)
     if not (show and n_todo):
         return None
     from tqdm.auto import tqdm

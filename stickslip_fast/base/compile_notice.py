@@ -36,6 +36,8 @@ import time
 
 from numba.core import event
 
+from .terminal import on_terminal
+
 __all__ = ["CompileNotice", "install", "installed", "set_enabled"]
 
 ENV_VAR = "STICKSLIP_FAST_COMPILE_NOTICE"
@@ -70,11 +72,7 @@ def _wanted(stream) -> bool:
         return env == "1"
     if multiprocessing.parent_process() is not None:
         return False  # a worker: its parent speaks for it
-    isatty = getattr(stream, "isatty", None)
-    try:
-        return bool(isatty and isatty())
-    except (ValueError, OSError):  # a closed or odd stream
-        return False
+    return on_terminal(stream)
 
 
 def _package_function(data) -> str | None:

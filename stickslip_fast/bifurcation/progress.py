@@ -15,11 +15,12 @@ report nothing. Nothing computed depends on it.
 from __future__ import annotations
 
 import contextlib
-import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextvars import ContextVar
 
 import numpy as np
+
+from ..base.terminal import show_progress
 
 __all__ = ["points_bar", "walk_reporter"]
 
@@ -31,12 +32,9 @@ _REPORTER: ContextVar[Callable[[np.ndarray], None] | None] = ContextVar(
 
 def _shown(progress: bool | None) -> bool:
     """True, False, or None: shown when standard error is a terminal (as for sweeps)."""
-    if progress is None:
-        isatty = getattr(sys.stderr, "isatty", None)
-        return bool(isatty and isatty())
-    if not isinstance(progress, (bool, np.bool_)):
+    if progress is not None and not isinstance(progress, (bool, np.bool_)):
         raise ValueError(f"progress must be True, False or None, got {progress!r}")
-    return bool(progress)
+    return show_progress(progress)
 
 
 @contextlib.contextmanager
