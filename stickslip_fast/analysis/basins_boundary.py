@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.terminal import show_progress
 from . import basins_measures as bm
 
 __all__ = ["Boundary", "refine_boundary", "EdgeCheck"]
@@ -236,7 +237,7 @@ def _bisect_all(
     ua, ub, la, lb, status = brackets
     done, n_iter = steps
     bar = None
-    if progress and n_iter:
+    if show_progress(progress) and n_iter:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n_iter, initial=done, desc="boundary bisection", unit="step")
