@@ -52,17 +52,18 @@ def locate_fold(which: str) -> tuple[ssf.Branch, ssf.Bifurcation]:
     return branch, next(b for b in branch.bifurcations if b.kind == "fold")
 
 
-def fold_curve(which: str, points: int) -> ssf.Curve:
+def fold_curve(which: str, points: int, checkpoint: Path | None = None) -> ssf.Curve:
     """Locate the fold at the start's k12 and follow it towards lower k12 (the curve ends
-    where it comes back to that k12, or after ``points``)."""
+    where it comes back to that k12, or after ``points``), recording its integrations in
+    ``checkpoint`` (a killed run resumes from it)."""
     k12 = STARTS[which][1]
     branch, fold = locate_fold(which)
     return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6 if k12 == -0.8 else k12),
-                                    direction=-1, ds=0.005,
-                                    ds_max=0.05, max_points=points, **CURVE_KW[which])  # fmt: skip
+                                    direction=-1, ds=0.005, ds_max=0.05, max_points=points,
+                                    checkpoint=checkpoint, **CURVE_KW[which])  # fmt: skip
 
 
-def resume_curve(path: Path, points: int) -> ssf.Curve:
+def resume_curve(path: Path, points: int, checkpoint: Path | None = None) -> ssf.Curve:
     """Go on from the last point of a curve file towards lower k12 with the closing
     settings (h = 1e-9, tol = 1e-9), from the fold there on a one-point branch."""
     old = ssf.Curve.from_hdf5(path)
@@ -73,7 +74,8 @@ def resume_curve(path: Path, points: int) -> ssf.Curve:
                         np.zeros(1, bool))  # fmt: skip
     fold = ssf.Bifurcation("fold", eta, 0, z.copy())
     return ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6), direction=-1, ds=0.005,
-                                    ds_max=0.05, max_points=points, **CURVE_KW["closing"])  # fmt: skip
+                                    ds_max=0.05, max_points=points, checkpoint=checkpoint,
+                                    **CURVE_KW["closing"])  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -88,13 +90,18 @@ def main(argv: list[str] | None = None) -> int:
     for which in args.which:
         t0 = time.perf_counter()
         path = Path(args.out) / f"p1_fold_{which}_eta_k12.h5"
-        if args.resume:
-            curve = resume_curve(path, args.points)
-            path = path.with_name(f"p1_fold_{which}_resumed_eta_k12.h5")
-        else:
-            curve = fold_curve(which, args.points)
         path.parent.mkdir(parents=True, exist_ok=True)
+        # a killed run goes on from its checkpoint when run again (docs/orbits.md)
+        if args.resume:
+            out = path.with_name(f"p1_fold_{which}_resumed_eta_k12.h5")
+            checkpoint = out.with_suffix(".ckpt")
+            curve = resume_curve(path, args.points, checkpoint)
+            path = out
+        else:
+            checkpoint = path.with_suffix(".ckpt")
+            curve = fold_curve(which, args.points, checkpoint)
         curve.to_hdf5(path)
+        checkpoint.unlink(missing_ok=True)
         print(f"{which}: {len(curve.values)} points to {curve.values[-1].tolist()} "
               f"({curve.status}, {time.perf_counter() - t0:.0f} s) -> {path}")  # fmt: skip
     return 0

@@ -69,9 +69,11 @@ def dc_motor_n2_fold() -> tuple[ssf.Branch, ssf.Bifurcation]:
     return branch, next(b for b in branch.bifurcations if b.kind == "fold")
 
 
-def fold_curve_vb(which: str, direction: int, points: int) -> ssf.Curve:
+def fold_curve_vb(which: str, direction: int, points: int,
+                  checkpoint: Path | None = None) -> ssf.Curve:  # fmt: skip
     """The fold ``which`` ("upper", "lower"; "dc-motor": Fig. 12's upper fold in v_b0;
-    "dc-motor-N2": two disks apart on the motor) followed in v_b up (+1) or down (-1)."""
+    "dc-motor-N2": two disks apart on the motor) followed in v_b up (+1) or down (-1),
+    recording its integrations in ``checkpoint`` (a killed run resumes from it)."""
     if which == "dc-motor-N2":
         (branch, fold), param2 = dc_motor_n2_fold(), "vb0"
     elif which == "dc-motor":
@@ -80,7 +82,7 @@ def fold_curve_vb(which: str, direction: int, points: int) -> ssf.Curve:
         (branch, fold), param2 = fold_curves_eta_k12.locate_fold(which), "vb"
     return ssf.continue_bifurcation(branch, fold, param2, VB_BOUNDS, direction=direction,
                                     ds=5e-3, ds_max=0.05, max_points=points,
-                                    **CURVE_KW)  # fmt: skip
+                                    checkpoint=checkpoint, **CURVE_KW)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -97,14 +99,16 @@ def main(argv: list[str] | None = None) -> int:
             if name not in wanted:
                 continue
             t0 = time.perf_counter()
-            curve = fold_curve_vb(which, direction, args.points)
             stem = {
                 "dc-motor": "upper_{}_eta_vb0_dcmotor",
                 "dc-motor-N2": "apart_{}_eta_vb0_dcmotor_N2",
             }.get(which, which + "_{}_eta_vb")
             path = Path(args.out) / f"p1_fold_{stem.format(name)}.h5"
             path.parent.mkdir(parents=True, exist_ok=True)
+            # a killed run goes on from its checkpoint when run again (docs/orbits.md)
+            curve = fold_curve_vb(which, direction, args.points, path.with_suffix(".ckpt"))
             curve.to_hdf5(path)
+            path.with_suffix(".ckpt").unlink(missing_ok=True)
             kinds = [(c.kind, [round(float(v), 10) for v in c.values]) for c in curve.codim2]
             print(f"{which} {name}: {len(curve.values)} points to {curve.values[-1].tolist()} "
                   f"({curve.status}, {time.perf_counter() - t0:.0f} s) codim2 {kinds} -> {path}",

@@ -13,9 +13,11 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import os
 
 import numpy as np
 
+from ..base.journal import journal
 from ..base.messages import plain
 from ..model.system import SWEEPABLE
 from .arclength import _locate_change
@@ -178,11 +180,16 @@ def continue_bifurcation(
     lyap_step: float | None = None,
     stick_events: bool = True,
     progress: bool | None = None,
+    checkpoint: str | os.PathLike | None = None,
 ) -> Curve:
     kind, system0, lo, hi = _check(branch, bifurcation, param2, bounds2)
     settings = dict(ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points, tol=tol)
     names = [branch.param, param2]
-    with points_bar(progress, max_points, f"continue_bifurcation {kind}", names):
+    arguments = dict(branch=branch, bifurcation=bifurcation, param2=param2, bounds2=(lo, hi),
+                     direction=direction, rtol=rtol, atol=atol, fd_step=fd_step, h=h,
+                     lyap_step=lyap_step, stick_events=stick_events, **settings)  # fmt: skip
+    with (journal(checkpoint, "continue_bifurcation", arguments),
+          points_bar(progress, max_points, f"continue_bifurcation {kind}", names)):  # fmt: skip
         if branch.period == 0:
             return continue_equilibrium_curve(branch, bifurcation, param2, (lo, hi), system0,
                                               direction=direction, h=h, fd_step=fd_step,

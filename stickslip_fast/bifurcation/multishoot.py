@@ -29,7 +29,8 @@ import math
 
 import numpy as np
 
-from ..base.interrupt import call_interruptible, new_abort_flag
+from ..base.interrupt import new_abort_flag
+from ..base.journal import call_journaled
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
 from ..core.variational import propagate_sensitivity, propagate_tangents
@@ -188,11 +189,11 @@ class MultiShooting:
         args = (np.ascontiguousarray(y, dtype=float), np.ascontiguousarray(U), s.to_array(),
                 s.n_oscillators, s.is_dc_motor, variant, float(tau), 0, rtol, atol, tatol)  # fmt: skip
         if sens_p is None:
-            code, y1, U1, _ = call_interruptible(
+            code, y1, U1, _ = call_journaled(
                 propagate_tangents, *args, _MAX_STEPS, abort=new_abort_flag()
             )
         else:
-            code, y1, U1, _ = call_interruptible(
+            code, y1, U1, _ = call_journaled(
                 propagate_sensitivity, *args, sens_p, sens_inv, _MAX_STEPS,
                 abort=new_abort_flag(),
             )  # fmt: skip
@@ -278,7 +279,7 @@ class MultiShooting:
                 args = (np.ascontiguousarray(y), np.eye(n)[:, :1].copy(), s.to_array(),
                         s.n_oscillators, s.is_dc_motor, variant, float(tau - t_done), 1,
                         rtol, atol, tatol)  # fmt: skip
-                code, y1, _, t = call_interruptible(
+                code, y1, _, t = call_journaled(
                     propagate_tangents, *args, _MAX_STEPS, abort=new_abort_flag()
                 )
                 if STATUS_NAMES[code] != "ok":

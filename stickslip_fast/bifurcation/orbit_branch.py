@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any
 
 import numpy as np
 
+from ..base.journal import journal
 from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
 from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS, MESH_LIMIT
@@ -184,6 +186,13 @@ max_segments : int
 progress : bool, optional
     Show a progress bar of the points, with the parameter's value (default:
     when standard error is a terminal).
+checkpoint : str or os.PathLike, optional
+    A file that records the branch's integrations as they are made
+    (:mod:`~stickslip_fast.base.journal`). Run the same call with the same file after
+    a kill or Ctrl-C, and it replays what was done in seconds and goes on: the
+    branch is bit-identical to one never interrupted. A file written for other
+    arguments or other code is an error naming what differs. Once done, the file
+    answers the same call again at once; delete it when the branch is saved.
 
 Returns
 -------
@@ -222,6 +231,7 @@ def continue_orbit(
     remesh: bool = False,
     max_segments: int = MAX_SEGMENTS,
     progress: bool | None = None,
+    checkpoint: str | os.PathLike | None = None,
 ) -> Branch:
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
@@ -234,7 +244,11 @@ def continue_orbit(
                         rtol=rtol, atol=atol, fd_step=fd_step, stick_events=stick_events,
                         sharp_ends=sharp_ends)  # fmt: skip
     mesh_args = (int(segments), bool(remesh), int(max_segments))
-    with points_bar(progress, max_points, f"continue_orbit {param}", [param]):
+    arguments = dict(orbit=orbit, param=param, bounds=(lo, hi), direction=direction,
+                     shooting=shooting, segments=segments, remesh=remesh,
+                     max_segments=max_segments, **dataclasses.asdict(walk))  # fmt: skip
+    with (journal(checkpoint, "continue_orbit", arguments),
+          points_bar(progress, max_points, f"continue_orbit {param}", [param])):  # fmt: skip
         if shooting == "multiple":
             return _continue_multiple_from(orbit, param, (lo, hi), direction, mesh_args, walk)
         branch, way_on = _continue_single(orbit, param, lam0, lo, hi, direction, walk)

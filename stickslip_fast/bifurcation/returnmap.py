@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from ..base.interrupt import call_interruptible, new_abort_flag
+from ..base.interrupt import new_abort_flag
+from ..base.journal import call_journaled
 from ..base.messages import plain
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
@@ -168,11 +169,11 @@ def _crossing_integrator(
         args = (y, U, p_arr, system.n_oscillators, system.is_dc_motor, variant, float(t_max), 1,
                 float(rtol), float(atol), float(tangent_atol))  # fmt: skip
         if sens_p is None:
-            code, y1, U1, t = call_interruptible(
+            code, y1, U1, t = call_journaled(
                 propagate_tangents, *args, _MAX_STEPS, abort=new_abort_flag()
             )
         else:
-            code, y1, U1, t = call_interruptible(
+            code, y1, U1, t = call_journaled(
                 propagate_sensitivity, *args, sens_p, sens_inv, _MAX_STEPS, abort=new_abort_flag()
             )  # fmt: skip
         status = STATUS_NAMES[code]

@@ -316,6 +316,11 @@ def main(argv: list[str] | None = None) -> int:
                 f"stickslip-fast: interrupted; finished chunks are in {out}, "
                 "run the same command again to resume"
             )
+        elif args.command == "continue" and out is not None and Path(f"{out}.checkpoint").exists():
+            msg = (
+                f"stickslip-fast: interrupted; the integrations so far are in {out}.checkpoint, "
+                "run the same command again to resume"
+            )
         else:  # nothing was written yet (or there is nothing to resume)
             msg = "stickslip-fast: interrupted"
         print(msg, file=sys.stderr)

@@ -9,18 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..base.journal import journal
 from .arguments import _check_writable, _config_from_args
 from .config import ConfigError, RunConfig
 
 
 def _cmd_continue(args: argparse.Namespace) -> int:
-    from ..bifurcation.continuation import (
-        continue_equilibrium,
-        continue_orbit,
-        join_branches,
-        switch_branch,
-    )
-
     cfg = _config_from_args(args)
     if cfg.continuation is None:
         raise ConfigError(
@@ -35,6 +29,29 @@ def _cmd_continue(args: argparse.Namespace) -> int:
     curve = {k: c.pop(k) for k in ("param2", "bounds2", "direction2", "kinds2") if k in c}
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     c["progress"] = False if args.quiet else None  # a bar of the points in a terminal
+    # every integration goes to a checkpoint beside the output until all files are written:
+    # the same command resumes after a kill, bit-identically (base/journal.py)
+    checkpoint = Path(f"{args.output}.checkpoint")
+    config = dict(system=cfg.system, integration=cfg.integration, y0=cfg.y0,
+                  sample_dt=cfg.sample_dt, continuation=cfg.continuation)  # fmt: skip
+    with journal(checkpoint, "stickslip-fast continue", config) as j:
+        if j.recorded:
+            say(f"resuming from {checkpoint} ({j.recorded} integrations recorded) ...")
+        _branches(cfg, c, args, say, (param, bounds, start, direction, switch, curve))
+    checkpoint.unlink(missing_ok=True)
+    return 0
+
+
+def _branches(cfg, c, args, say, what):
+    """The branch of ``cfg``'s orbit or equilibrium, and the branches and curves from it."""
+    from ..bifurcation.continuation import (
+        continue_equilibrium,
+        continue_orbit,
+        join_branches,
+        switch_branch,
+    )
+
+    param, bounds, start, direction, switch, curve = what
     if start == "orbit":
         first, follow = _orbit_from_config(cfg, param, c.pop("period", None), say), continue_orbit
     else:
@@ -53,7 +70,6 @@ def _cmd_continue(args: argparse.Namespace) -> int:
         _switch_and_follow(branch, bounds, c, args, say, switch_branch, continue_orbit)
     if curve:
         _curves(branch, curve, c.get("tol", 1e-10), c.get("stick_events", True), args, say)
-    return 0
 
 
 def _curves(branch, curve, tol, stick_events, args, say):
