@@ -117,7 +117,7 @@ def test_runner_passes_the_table_to_stable_manifold(monkeypatch):
     assert calls["find"] == (cfg.system, FOLD_SADDLE, 2, {"rtol": 1e-11})
     r, orb, kw = calls["manifold"]
     assert r is res and isinstance(orb, Orb)
-    assert kw == {"store": False, "seeds": "scan", "scan": {"grid": 6, "r_scan": 1e-2},
+    assert kw == {"store": False, "checkpoint": None, "seeds": "scan", "scan": {"grid": 6, "r_scan": 1e-2},
                   "ds": 2e-3, "ds_min": 1e-7, "tol": 1e-11, "r_local": 1e-4, "n_max": 30,
                   "max_points": 400, "max_angle": 0.3, "rtol": 1e-11}  # fmt: skip
     assert m.settings["config"]["manifold"]["period"] == 2
@@ -159,6 +159,7 @@ def test_cli_traces_the_fold_saddles_manifold_and_keeps_it_on_a_rerun(tmp_path, 
     m = ssf.load_basins(out).manifold
     assert len(m.u) >= 2 and np.all(m.distance <= 1e-6)
     assert m.settings["seeds"] == "scan" and m.settings["config"]["manifold"]["n_max"] == 12
+    assert not (tmp_path / "m.h5.checkpoint").exists()  # removed once the curve is stored
     # the same config again: the stored curve is kept
     assert main(["basins", str(cfg), "-o", str(out)]) == 0
     assert "stored for the same settings; not recomputed" in capsys.readouterr().out

@@ -365,3 +365,25 @@ def test_a_curve_killed_by_sigkill_resumes_bit_identically(fold_branch, tmp_path
     assert proc.returncode == -signal.SIGKILL, "the curve ended before the kill"
     got = ssf.continue_bifurcation(branch, fold, "k12", (-0.806, -0.79), checkpoint=path, **kw)
     assert describe(got) == describe(ref)
+
+
+def test_a_stable_manifold_resumes_bit_identically(tmp_path, monkeypatch, caplog):
+    # the model case of tests/test_basins_manifold.py: the P1 saddle past Fig. 6's upper
+    # fold, traced from one refined boundary point
+    s = ssf.System.preset("asymmetric", eta=3.323654117482133)
+    saddle = [0.07259114445455046, 0.0, 0.12216932570735764, -0.006665729137139496]
+    orbit = ssf.find_orbit(s, saddle, period=1)
+    seed = np.array([0.0677029, -0.14516129])
+    box = np.stack([seed - 1e-3, seed + 1e-3], axis=1)
+    kw = dict(plane=("x1", "phi1"), bounds=box, seeds=[seed], ds=4e-4, r_local=1e-6,
+              n_max=12, max_points=3)  # fmt: skip
+    ref = ssf.stable_manifold(s, orbit, **kw)
+    assert len(ref.u) >= 4
+    got, total = _resumed_halfway(
+        lambda path: ssf.stable_manifold(s, orbit, checkpoint=path, **kw),
+        tmp_path, monkeypatch, caplog,
+    )  # fmt: skip
+    assert total > 100
+    assert describe(got) == describe(ref)
+    with pytest.raises(ValueError, match="argument 'trace' was"):
+        ssf.stable_manifold(s, orbit, checkpoint=tmp_path / "half.ckpt", **{**kw, "n_max": 13})

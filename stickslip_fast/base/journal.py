@@ -2,8 +2,9 @@
 
 A continuation is a deterministic walk: the same call makes the same kernel calls with the
 same inputs, in the same order, and gets the same bits back. Almost all of its time goes to
-a few pure kernels, the variational integrations of return maps and shooting segments. So a
-continuation resumes from a *journal* of those calls. Inside :func:`journal`, each call
+a few pure kernels, the variational integrations of return maps and shooting segments (and,
+for a stable manifold's trace, the crossings of its plane's points). So a continuation
+resumes from a *journal* of those calls. Inside :func:`journal`, each call
 through :func:`call_journaled` is answered from the file when its inputs were seen before,
 and otherwise computed and appended to the file at once. Run the same call again with the
 same file after a kill, and the walk replays the recorded calls in seconds (only the linear

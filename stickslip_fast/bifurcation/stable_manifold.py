@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from ..analysis.basins_manifold import StableManifold, local_saddles, trace_manifold
-from ..base.interrupt import call_interruptible, new_abort_flag
+from ..base.interrupt import new_abort_flag
+from ..base.journal import call_journaled, journal
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
 from ..core.variational import propagate_tangents
@@ -59,7 +60,7 @@ def plane_crossings(
         for k in range(int(n)):
             if k:
                 y[SECTION_INDEX] = 0.0  # on the section: no crossing at t = 0
-            code, y1, _, t = call_interruptible(
+            code, y1, _, t = call_journaled(
                 propagate_tangents, y, U.copy(), p_arr, system.n_oscillators,
                 system.is_dc_motor, variant, float(t_max), 1, float(rtol), float(atol),
                 _TANGENT_ATOL, _MAX_STEPS, abort=new_abort_flag(),
@@ -221,11 +222,69 @@ def _resolve_seeds(seeds, scan, result, trace: dict, target, orbit, **plane_kw) 
     elif scan is not None:
         raise ValueError("scan is an option of seeds='scan'; seeds were given otherwise")
     if seeds is None:
-        if result is None or result.boundary is None:
+        seeds = _boundary_seeds(result)
+        if seeds is None:
             raise ValueError("seeds not given and the map has no refined boundary to seed from")
-        ok = result.boundary.status == 0
-        seeds = np.stack([result.boundary.u[ok], result.boundary.v[ok]], axis=1)
     return seeds, trace, scanned
+
+
+def _boundary_seeds(result) -> np.ndarray | None:
+    """The refined boundary's points of a basin map (None without one)."""
+    if result is None or result.boundary is None:
+        return None
+    ok = result.boundary.status == 0
+    return np.stack([result.boundary.u[ok], result.boundary.v[ok]], axis=1)
+
+
+#: :func:`stable_manifold`'s docstring (kept out of the function body, as for
+#: :func:`~stickslip_fast.continue_orbit`: the layout rule counts a function's lines).
+_STABLE_MANIFOLD_DOC = """The stable manifold of a saddle orbit intersected with a plane of starts, as curves.
+
+A plane point p is on the curve when its n-th crossing P^n(p) lands on the
+saddle's local stable subspace: w . (P^n(p) - x*) = 0 with w the left
+eigenvector of the unstable multiplier, and ||P^n(p) - x*|| <= ``r_local``
+(n adapted along the curve). No backward integration. Traced by
+predictor-corrector continuation from ``seeds`` both ways until the plane's
+box (:func:`stickslip_fast.analysis.basins_manifold.trace_manifold`).
+
+Parameters
+----------
+target : BasinsResult or System
+    A basin map (its system, plane, base and box; the result is stored in its
+    file's ``/basins/manifold``), or a System with ``plane``, ``base``, ``bounds``.
+orbit : Orbit
+    The saddle: :func:`find_orbit`'s record, or any object with ``system``,
+    ``points`` (p, n_state) on the section and ``period`` (e.g. from an
+    unstable point of a :func:`continue_orbit` branch). It must have exactly
+    one real multiplier outside the unit circle.
+seeds : array_like (k, 2) or "scan", optional
+    Plane points near the curve. Default: the map's refined boundary points
+    (:func:`refine_boundary`, status 0). ``"scan"``: from the saddle alone,
+    :func:`manifold_seeds` over the map's grid (or ``scan["grid"]``) with the
+    tracer's ``r_local``, ``n_max``, ``tol``; recorded in ``settings["scan"]``;
+    ``skip_radius`` then defaults to a quarter of the grid's spacing.
+plane, base, bounds
+    With a System: the plane as for :func:`basins`, and its box
+    [[u_min, u_max], [v_min, v_max]].
+rtol, atol : float
+    Integration tolerances of the return map.
+store : bool
+    Write ``/basins/manifold`` into the map's file (and set ``target.manifold``).
+scan : dict, optional
+    With ``seeds="scan"``: arguments of :func:`manifold_seeds` (``grid``, ``r_scan``, ...).
+checkpoint : str or os.PathLike, optional
+    A file that records the integrations as they are made: the same call with
+    the same file resumes after a kill, bit-identically (as for
+    :func:`~stickslip_fast.continue_orbit`; docs/orbits.md, "Checkpoints").
+**trace
+    Settings of :func:`trace_manifold`: ``ds``, ``ds_min``, ``ds_max``, ``tol``,
+    ``r_local``, ``n_max``, ``max_points``, ``max_angle``, ``seed_radius``,
+    ``skip_radius``.
+
+Returns
+-------
+StableManifold
+"""
 
 
 def stable_manifold(
@@ -240,59 +299,21 @@ def stable_manifold(
     atol: float = _DEFAULT_ATOL,
     store: bool = True,
     scan: dict | None = None,
+    checkpoint: Any = None,
     **trace: Any,
 ) -> StableManifold:
-    """The stable manifold of a saddle orbit intersected with a plane of starts, as curves.
-
-    A plane point p is on the curve when its n-th crossing P^n(p) lands on the
-    saddle's local stable subspace: w . (P^n(p) - x*) = 0 with w the left
-    eigenvector of the unstable multiplier, and ||P^n(p) - x*|| <= ``r_local``
-    (n adapted along the curve). No backward integration. Traced by
-    predictor-corrector continuation from ``seeds`` both ways until the plane's
-    box (:func:`stickslip_fast.analysis.basins_manifold.trace_manifold`).
-
-    Parameters
-    ----------
-    target : BasinsResult or System
-        A basin map (its system, plane, base and box; the result is stored in its
-        file's ``/basins/manifold``), or a System with ``plane``, ``base``, ``bounds``.
-    orbit : Orbit
-        The saddle: :func:`find_orbit`'s record, or any object with ``system``,
-        ``points`` (p, n_state) on the section and ``period`` (e.g. from an
-        unstable point of a :func:`continue_orbit` branch). It must have exactly
-        one real multiplier outside the unit circle.
-    seeds : array_like (k, 2) or "scan", optional
-        Plane points near the curve. Default: the map's refined boundary points
-        (:func:`refine_boundary`, status 0). ``"scan"``: from the saddle alone,
-        :func:`manifold_seeds` over the map's grid (or ``scan["grid"]``) with the
-        tracer's ``r_local``, ``n_max``, ``tol``; recorded in ``settings["scan"]``;
-        ``skip_radius`` then defaults to a quarter of the grid's spacing.
-    plane, base, bounds
-        With a System: the plane as for :func:`basins`, and its box
-        [[u_min, u_max], [v_min, v_max]].
-    rtol, atol : float
-        Integration tolerances of the return map.
-    store : bool
-        Write ``/basins/manifold`` into the map's file (and set ``target.manifold``).
-    scan : dict, optional
-        With ``seeds="scan"``: arguments of :func:`manifold_seeds` (``grid``, ``r_scan``, ...).
-    **trace
-        Settings of :func:`trace_manifold`: ``ds``, ``ds_min``, ``ds_max``, ``tol``,
-        ``r_local``, ``n_max``, ``max_points``, ``max_angle``, ``seed_radius``,
-        ``skip_radius``.
-
-    Returns
-    -------
-    StableManifold
-    """
     system, b, dirs, box, result = _plane_of(target, plane, base, bounds)
-    seeds, trace, scanned = _resolve_seeds(
-        seeds, scan, result, trace, target, orbit, plane=plane, base=base, bounds=bounds,
-        rtol=rtol, atol=atol,
-    )  # fmt: skip
-    pts, saddles = _saddles(system, orbit, rtol, atol)
-    r = trace_manifold(_plane_map(system, b, dirs, rtol, atol), saddles, seeds, box,
-                       period=int(orbit.period), **trace)  # fmt: skip
+    given = dict(system=system, base=b, directions=dirs, box=box, scan=scan, rtol=rtol,
+                 atol=atol, trace=trace, seeds=_boundary_seeds(result) if seeds is None else seeds,
+                 saddle=(orbit.system, np.asarray(orbit.points), orbit.period))  # fmt: skip
+    with journal(checkpoint, "stable_manifold", given):
+        seeds, trace, scanned = _resolve_seeds(
+            seeds, scan, result, trace, target, orbit, plane=plane, base=base, bounds=bounds,
+            rtol=rtol, atol=atol,
+        )  # fmt: skip
+        pts, saddles = _saddles(system, orbit, rtol, atol)
+        r = trace_manifold(_plane_map(system, b, dirs, rtol, atol), saddles, seeds, box,
+                           period=int(orbit.period), **trace)  # fmt: skip
     settings = {k: (v if np.isscalar(v) else np.asarray(v).tolist()) for k, v in trace.items()}
     settings.update(rtol=rtol, atol=atol, seed_status=r["seed_status"])
     if scanned is not None:
@@ -307,6 +328,9 @@ def stable_manifold(
     if result is not None and store:
         store_manifold(result, m)
     return m
+
+
+stable_manifold.__doc__ = _STABLE_MANIFOLD_DOC
 
 
 def store_manifold(result: Any, m: StableManifold) -> None:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -171,9 +172,14 @@ def run_manifold(result: Any, c: dict, refine: dict | None = None) -> tuple[Any,
     kw = {k: c[k] for k in _TRACE if k in c}
     if c["seeds"] == "scan":
         kw.update(seeds="scan", scan=dict(c["scan"]))
-    m = stable_manifold(result, orb, store=False, **kw)
+    # its integrations go to a checkpoint beside the map until the manifold is stored: the
+    # same command resumes after a kill, bit-identically (base/journal.py)
+    checkpoint = None if result.path is None else Path(f"{result.path}.checkpoint")
+    m = stable_manifold(result, orb, store=False, checkpoint=checkpoint, **kw)
     m.settings["config"] = fp
     store_manifold(result, m)
+    if checkpoint is not None:
+        checkpoint.unlink(missing_ok=True)
     return m, True
 
 
