@@ -14,7 +14,9 @@ point it finds minus the curve's eta). Numbers and what they mean: docs/orbits.m
     PYTHONPATH=. python3 scripts/ns_two_disks.py [--out DIR] [--param2 k12]
         [--bounds2 -0.95 -0.6] [--max-points 60]
 
-About 10 minutes on one core of the 2-core VM (the curves are most of it).
+About 10 minutes on one core of the 2-core VM (the curves are most of it). Its
+integrations go to ``DIR/ns_two_disks.ckpt`` (``ssf.checkpoint``): a killed run, run again
+with the same arguments, replays them and goes on, and the file is removed at the end.
 """
 
 from __future__ import annotations
@@ -95,15 +97,8 @@ def _check(curve, fractions=(0.25, 0.5, 1.0)) -> list:
     return out
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("out/ns_two_disks"))
-    ap.add_argument("--param2", default="k12")
-    ap.add_argument("--bounds2", type=float, nargs=2, default=(-0.95, -0.6))
-    ap.add_argument("--max-points", type=int, default=60)
-    args = ap.parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
-    warnings.simplefilter("ignore", RuntimeWarning)
+def _branches_and_curves(args) -> dict:
+    """The branches from eta = 6 and their NS curves, written into ``args.out``; the summary."""
     summary = {"branches": [], "curves": []}
     for k, branch in enumerate(_branches(6.0, (4.0, 10.0))):
         branch.to_hdf5(args.out / f"branch_{k}.h5")
@@ -128,7 +123,25 @@ def main(argv=None) -> int:
                      "codim2": [(p.kind, p.values.tolist()) for p in curve.codim2],
                      "checks": checks}
                 )  # fmt: skip
+    return summary
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("out/ns_two_disks"))
+    ap.add_argument("--param2", default="k12")
+    ap.add_argument("--bounds2", type=float, nargs=2, default=(-0.95, -0.6))
+    ap.add_argument("--max-points", type=int, default=60)
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    warnings.simplefilter("ignore", RuntimeWarning)
+    # every integration goes to one checkpoint: a killed run resumes when run again
+    checkpoint = args.out / "ns_two_disks.ckpt"
+    with ssf.checkpoint(checkpoint, param2=args.param2, bounds2=list(args.bounds2),
+                        max_points=args.max_points):  # fmt: skip
+        summary = _branches_and_curves(args)
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1))
+    checkpoint.unlink(missing_ok=True)
     return 0
 
 

@@ -30,6 +30,7 @@ from .analysis.census import CensusResult, census, load_census
 from .analysis.census_plane import CensusPlaneResult
 from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
 from .analysis.sweep import MODES, SweepResult, load_sweep, sweep  # noqa: I001  (the function shadows the module)
+from .base.journal import checkpoint
 from .base.version import package_version
 from .bifurcation.continuation import (
     Bifurcation,
@@ -86,6 +87,7 @@ __all__ = [
     "continue_bifurcation",
     "Curve",
     "Codim2Point",
+    "checkpoint",
     "METHODS",
     "STATUS_NAMES",
     "PRESETS",

@@ -3,6 +3,7 @@ gives the bits of a run that was never interrupted; a wrong file is refused by n
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -387,3 +388,34 @@ def test_a_stable_manifold_resumes_bit_identically(tmp_path, monkeypatch, caplog
     assert describe(got) == describe(ref)
     with pytest.raises(ValueError, match="argument 'trace' was"):
         ssf.stable_manifold(s, orbit, checkpoint=tmp_path / "half.ckpt", **{**kw, "n_max": 13})
+
+
+def test_a_script_under_one_checkpoint_resumes_bit_identically(fold_branch, tmp_path,
+                                                               monkeypatch, caplog):  # fmt: skip
+    orbit, _, _ = fold_branch
+    curve_kw = dict(direction=-1, ds=0.002, ds_max=0.01, max_points=4, progress=False)
+
+    def script(path):
+        """A branch through the sharp fold, then the fold's curve in k12."""
+        with ssf.checkpoint(path, preset="asymmetric") if path else contextlib.nullcontext():
+            br = ssf.continue_orbit(orbit, "eta", (3.30, 3.35), ds=2e-3, ds_max=5e-3,
+                                    max_points=20, stick_events=False, progress=False)  # fmt: skip
+            fold = next(b for b in br.bifurcations if b.kind == "fold")
+            return br, ssf.continue_bifurcation(br, fold, "k12", (-0.806, -0.79), **curve_kw)
+
+    ref = script(None)
+    got, total = _resumed_halfway(script, tmp_path, monkeypatch, caplog)
+    assert total > 100
+    assert describe(got) == describe(ref)
+    with pytest.raises(ValueError, match="argument 'preset' was 'asymmetric', now 'literature'"):
+        with ssf.checkpoint(tmp_path / "half.ckpt", preset="literature"):
+            pass
+    # a call with its own file records there, not in the script's
+    with ssf.checkpoint(tmp_path / "outer.ckpt") as outer:
+        ssf.continue_bifurcation(ref[0], ref[0].bifurcations[0], "k12", (-0.806, -0.79),
+                                 checkpoint=tmp_path / "inner.ckpt", **curve_kw)  # fmt: skip
+        assert outer.misses == 0
+    assert (tmp_path / "inner.ckpt").exists() and not (tmp_path / "outer.ckpt").exists()
+    with pytest.raises(ValueError, match="needs a path"):
+        with ssf.checkpoint(None):
+            pass

@@ -40,7 +40,7 @@ import numpy as np
 
 from .interrupt import call_interruptible
 
-__all__ = ["Journal", "journal", "call_journaled", "describe"]
+__all__ = ["Journal", "journal", "checkpoint", "call_journaled", "describe"]
 
 _log = logging.getLogger("stickslip_fast.checkpoint")
 
@@ -351,6 +351,53 @@ def journal(
                   j.hits + j.misses, j.misses)  # fmt: skip
         if not (j.recorded or j.misses):  # nothing was integrated: leave no empty file
             j.path.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def checkpoint(path: str | os.PathLike, **config: Any) -> Iterator[Journal]:
+    """Record the integrations of every continuation inside in one file, for a script.
+
+    A script that runs several branches, curves or manifolds one after another (and
+    whatever it computes between them) resumes after a kill when run again: each call
+    inside replays its recorded integrations and goes on, bit-identically. A call
+    given a ``checkpoint`` of its own records into that one instead.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The checkpoint file (created, or resumed from).
+    **config
+        What the script's results depend on beyond its calls' arguments (a preset,
+        a grid...): a file written for other values is refused, naming the key. The
+        records themselves are keyed by every input of their integration, so a
+        changed call can never be answered with another's result; ``config`` only
+        keeps runs apart.
+
+    Yields
+    ------
+    Journal
+        ``recorded`` (calls in the file when it was opened), ``hits`` and
+        ``misses`` (calls answered from it, and computed, so far).
+
+    Raises
+    ------
+    ValueError
+        For a file written for another ``config``, by other code, or not a
+        checkpoint file.
+    RuntimeError
+        For a file in use by another process.
+
+    Examples
+    --------
+    >>> with ssf.checkpoint("fold_curves.ckpt", preset="asymmetric"):  # doctest: +SKIP
+    ...     branch = ssf.continue_orbit(orbit, "eta", (3.2, 3.4))
+    ...     fold = next(b for b in branch.bifurcations if b.kind == "fold")
+    ...     curve = ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.6))
+    """
+    if path is None:
+        raise ValueError("checkpoint needs a path, got None")
+    with journal(path, "checkpoint", config) as j:
+        yield j
 
 
 def call_journaled(kernel: Callable[..., Any], *args: Any, abort: np.ndarray) -> Any:
