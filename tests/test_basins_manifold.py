@@ -178,3 +178,12 @@ def test_model_curve_lands_on_the_saddle_and_separates_two_basins(fold_saddle, t
     np.testing.assert_array_equal(back.uv, m.uv)
     np.testing.assert_array_equal(back.n, m.n)
     assert back.branch_status == m.branch_status and back.settings == m.settings
+
+
+def test_seeds_are_required_without_a_refined_boundary(fold_saddle):
+    box = [[0.06, 0.07], [-0.15, -0.14]]
+    with pytest.raises(ValueError, match="no refined boundary to seed from"):
+        ssf.stable_manifold(fold_saddle.system, fold_saddle, plane=("x1", "phi1"), bounds=box)
+    with pytest.raises(ValueError, match="scan is an option of seeds='scan'"):
+        ssf.stable_manifold(fold_saddle.system, fold_saddle, plane=("x1", "phi1"), bounds=box,
+                            scan={"grid": 4})  # fmt: skip

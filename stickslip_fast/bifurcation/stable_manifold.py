@@ -221,10 +221,8 @@ def _resolve_seeds(seeds, scan, result, trace: dict, target, orbit, **plane_kw) 
         trace = {"skip_radius": 0.25 * float(spacing), **trace}  # one curve, many edges
     elif scan is not None:
         raise ValueError("scan is an option of seeds='scan'; seeds were given otherwise")
-    if seeds is None:
-        seeds = _boundary_seeds(result)
-        if seeds is None:
-            raise ValueError("seeds not given and the map has no refined boundary to seed from")
+    if seeds is None:  # stable_manifold found no boundary to seed from
+        raise ValueError("seeds not given and the map has no refined boundary to seed from")
     return seeds, trace, scanned
 
 
@@ -303,8 +301,10 @@ def stable_manifold(
     **trace: Any,
 ) -> StableManifold:
     system, b, dirs, box, result = _plane_of(target, plane, base, bounds)
+    if seeds is None:  # the refined boundary's points (None without one: refused below)
+        seeds = _boundary_seeds(result)
     given = dict(system=system, base=b, directions=dirs, box=box, scan=scan, rtol=rtol,
-                 atol=atol, trace=trace, seeds=_boundary_seeds(result) if seeds is None else seeds,
+                 atol=atol, trace=trace, seeds=seeds,
                  saddle=(orbit.system, np.asarray(orbit.points), orbit.period))  # fmt: skip
     with journal(checkpoint, "stable_manifold", given):
         seeds, trace, scanned = _resolve_seeds(
