@@ -9,6 +9,7 @@ plane start as it is, then crossing to crossing on the section). See docs/basins
 from __future__ import annotations
 
 import math
+import os
 from typing import Any
 
 import numpy as np
@@ -297,7 +298,7 @@ def stable_manifold(
     atol: float = _DEFAULT_ATOL,
     store: bool = True,
     scan: dict | None = None,
-    checkpoint: Any = None,
+    checkpoint: str | os.PathLike | None = None,
     **trace: Any,
 ) -> StableManifold:
     system, b, dirs, box, result = _plane_of(target, plane, base, bounds)
