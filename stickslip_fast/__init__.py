@@ -23,7 +23,16 @@ _compile_gc.install()  # no full garbage collections during a Numba compile
 _compile_notice.install()  # a line on the terminal while a kernel compiles for long
 
 # ruff: noqa: E402
-from .analysis import LyapunovResult, SyncResult, largest_lyapunov, phases_from_events, sync_error
+from .analysis import (
+    LyapunovResult,
+    LyapunovSpectrum,
+    SyncResult,
+    kaplan_yorke,
+    largest_lyapunov,
+    lyapunov_spectrum,
+    phases_from_events,
+    sync_error,
+)
 from .analysis.basins import BasinsResult, basins, load_basins
 from .analysis.basins_manifold import StableManifold
 from .analysis.census import CensusResult, census, load_census
@@ -70,6 +79,9 @@ __all__ = [
     "MODES",
     "largest_lyapunov",
     "LyapunovResult",
+    "lyapunov_spectrum",
+    "LyapunovSpectrum",
+    "kaplan_yorke",
     "phases_from_events",
     "SyncResult",
     "sync_error",

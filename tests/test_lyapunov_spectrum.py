@@ -1,0 +1,152 @@
+"""Lyapunov spectrum (QR method): against the linearisation at an equilibrium, the Floquet
+multipliers of a periodic orbit, Liouville's formula, and the largest exponent."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.base.jit import python_callable
+from stickslip_fast.model.equations import dense_jacobian, rhs
+
+ASYM = ssf.System.preset("asymmetric", eta=2.0)
+
+
+def _fd_jacobian(system: ssf.System, y: np.ndarray) -> np.ndarray:
+    """Central differences of the right-hand side: a Jacobian that does not use the analytic one."""
+    f = python_callable(rhs)
+    p = system.to_array()
+    p[ssf.model.params.P_ETAP] = ssf.model.params.eta_prime(system.eta)
+    n = y.size
+    jac = np.empty((n, n))
+    for c in range(n):
+        h = 1e-7 * max(1.0, abs(y[c]))
+        up, dn = np.zeros(n), np.zeros(n)
+        e = np.zeros(n)
+        e[c] = h
+        f(y + e, p, system.n_oscillators, system.is_dc_motor, up)
+        f(y - e, p, system.n_oscillators, system.is_dc_motor, dn)
+        jac[:, c] = (up - dn) / (2 * h)
+    return jac
+
+
+def _mean_trace(system: ssf.System, samples: np.ndarray) -> float:
+    """The divergence averaged over uniform samples of a trajectory (analytic Jacobian)."""
+    p = system.to_array()
+    p[ssf.model.params.P_ETAP] = ssf.model.params.eta_prime(system.eta)
+    n_osc, dc = system.n_oscillators, system.is_dc_motor
+    return float(np.mean([np.trace(dense_jacobian(y, p, n_osc, dc)) for y in samples]))
+
+
+def test_equilibrium_spectrum_is_the_real_parts_of_the_eigenvalues():
+    # the stable steady sliding at eta = 2.0: u' = J u with J constant, so the exponents are
+    # the real parts of J's eigenvalues (a complex pair twice), J here by finite differences
+    eq = ssf.find_equilibrium(ASYM)
+    assert eq.stable
+    reference = np.sort(np.linalg.eigvals(_fd_jacobian(ASYM, eq.state)).real)[::-1]
+    spec = ssf.lyapunov_spectrum(ASYM, 4000.0, 0.0, y0=eq.state, k=4)
+    assert spec.status == "ok" and spec.resolved.all()
+    np.testing.assert_allclose(np.sort(spec.exponents_fit)[::-1], reference, atol=5e-4)
+    # all four sum to the trace exactly (Liouville), whatever the rotation of the pair
+    assert spec.exponents.sum() == pytest.approx(reference.sum(), abs=1e-6)
+    assert spec.divergence == pytest.approx(reference.sum(), rel=1e-9)
+    assert spec.kaplan_yorke == 0.0
+    assert spec.convergence.shape[1] == 5
+
+
+def test_periodic_orbit_leading_exponents_are_its_floquet_exponents():
+    # the period-1 orbit at eta = 2.0 (Fig. 6): 0 along the flow, then log|mu| / T of its
+    # leading multiplier from find_orbit's monodromy (Newton on the Poincare map)
+    orbit = ssf.find_orbit(ASYM, ssf.simulate(ASYM, 3000, stop="converged"))
+    mu = orbit.multipliers[np.argmax(np.abs(orbit.multipliers))]
+    spec = ssf.lyapunov_spectrum(ASYM, 3000.0, 1000.0, y0=orbit.points[0], k=2)
+    assert spec.status == "ok" and spec.resolved.all()
+    assert abs(spec.exponents_fit[0]) < 1e-4
+    assert spec.exponents_fit[1] == pytest.approx(math.log(abs(mu)) / orbit.T, abs=2e-4)
+    assert spec.kaplan_yorke == pytest.approx(1.0, abs=0.01) or spec.kaplan_yorke == 0.0
+    # the window's mean divergence: the stick phase dominates it (~ -9000)
+    one_period = ssf.simulate(ASYM, orbit.T, 0.0, y0=orbit.points[0], rtol=1e-11, atol=1e-13,
+                              sample_dt=2e-4)  # fmt: skip
+    assert spec.divergence == pytest.approx(_mean_trace(ASYM, one_period.y), rel=0.01)
+    assert spec.divergence < -1000
+
+
+@pytest.mark.parametrize("k", [3, 4])
+def test_directions_a_stick_phase_crushes_are_flagged_unresolved(k):
+    # the stick phase contracts two directions beyond the float range (the divergence
+    # averages thousands): their exponents are lost, flagged, and the full sum misses it
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        spec = ssf.lyapunov_spectrum(ASYM, 60.0, 20.0, k=k)
+    assert spec.status == "ok"
+    assert spec.resolved.tolist() == [True, True] + [False] * (k - 2)
+    assert spec.divergence < -1000
+    assert abs(spec.exponents.sum() - spec.divergence) > 0.5 * abs(spec.divergence)
+    assert any(issubclass(w.category, RuntimeWarning) and "not resolved" in str(w.message)
+               for w in caught)  # fmt: skip
+
+
+def test_two_disks_on_a_motor_divergence_and_leading_exponent():
+    # N = 2 on the DC motor (n = 9): the divergence includes the motor's own term, and
+    # the first vector is Benettin's largest exponent's
+    system = ssf.System.preset("asymmetric", eta=1.5, n_oscillators=2, drive="dc-motor")
+    y0 = [0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1, 0.0, system.vb0]
+    spec = ssf.lyapunov_spectrum(system, 400.0, 100.0, y0=y0, k=2)
+    assert spec.status == "ok"
+    largest = ssf.largest_lyapunov(system, 400.0, 100.0, y0=y0)
+    assert spec.exponents[0] == pytest.approx(largest.exponent, abs=2e-3)
+    run = ssf.simulate(system, 400.0, 100.0, y0=y0, rtol=1e-10, atol=1e-12, sample_dt=2e-3)
+    assert spec.divergence == pytest.approx(_mean_trace(system, run.y), rel=0.02)
+
+
+def test_one_vector_is_the_largest_exponent():
+    system = ssf.System.preset("asymmetric", eta=9.99)
+    spec = ssf.lyapunov_spectrum(system, 600.0, 200.0, k=1)
+    largest = ssf.largest_lyapunov(system, 600.0, 200.0)
+    assert spec.exponents[0] == largest.exponent
+    assert spec.exponents_fit[0] == largest.exponent_fit
+    np.testing.assert_array_equal(spec.convergence, largest.convergence)
+
+
+def test_kaplan_yorke_dimension():
+    assert ssf.kaplan_yorke([0.9056, 0.0, -14.5723]) == pytest.approx(2.06214, abs=1e-5)  # Lorenz
+    assert ssf.kaplan_yorke([-14.5723, 0.9056, 0.0]) == pytest.approx(2.06214, abs=1e-5)
+    assert ssf.kaplan_yorke([-0.1, -2.0]) == 0.0
+    assert ssf.kaplan_yorke([0.0, -0.2421]) == 1.0
+    assert ssf.kaplan_yorke([0.3, 0.1]) == 2.0  # every partial sum >= 0: the count
+    assert math.isnan(ssf.kaplan_yorke([0.1, math.nan]))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({}, "k \\(how many exponents, 1 to 4\\) is needed"),
+        ({"k": 0}, "k must be in \\[1, 4\\]"),
+        ({"k": 5}, "k must be in \\[1, 4\\]"),
+        ({"k": True}, "k must be an integer"),
+        ({"k": 2.0}, "k must be an integer"),
+        ({"frame": np.eye(3)}, "frame must have shape \\(k, 4\\)"),
+        ({"frame": np.ones((2, 4))}, "linearly independent"),
+        ({"frame": np.eye(4)[:2], "k": 3}, "k \\(3\\) differs from the rows of frame \\(2\\)"),
+        ({"frame": np.full((1, 4), np.nan)}, "frame must be finite"),
+        ({"k": 2, "renorm_dt": 0.0}, "renorm_dt must be finite and > 0"),
+        ({"k": 2, "tangent_atol": -1.0}, "tangent_atol must be finite and > 0"),
+    ],
+)
+def test_bad_arguments_are_named(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ssf.lyapunov_spectrum(ASYM, 10.0, **kwargs)
+
+
+def test_a_given_frame_is_used_in_order():
+    # the first row alone decides the first exponent: e_1 gives the same as k = 1 from e_1
+    frame = np.eye(4)[[0, 2]]
+    spec = ssf.lyapunov_spectrum(ASYM, 300.0, 100.0, frame=frame)
+    largest = ssf.largest_lyapunov(ASYM, 300.0, 100.0, u0=np.eye(4)[0])
+    assert spec.settings["k"] == 2
+    assert spec.exponents.shape == (2,)
+    assert spec.exponents[0] == pytest.approx(largest.exponent, abs=1e-3)
