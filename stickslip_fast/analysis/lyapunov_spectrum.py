@@ -94,7 +94,7 @@ _SPECTRUM_DOC = """The k largest Lyapunov exponents from the variational equatio
 
     Checks (tests/test_lyapunov_spectrum.py): at a stable equilibrium the
     exponents are the real parts of the Jacobian's eigenvalues; on a periodic
-    orbit of period T they are 0 and log |mu| / T of its Floquet multipliers mu
+    orbit of period T they are 0 and ``log|mu| / T`` of its Floquet multipliers mu
     (the ones a stick phase does not crush: the others are below the
     monodromy's rounding); all n sum to the mean divergence. With ``k = 1`` the
     result is :func:`largest_lyapunov`'s exponent. A step costs about 1 + k
@@ -126,8 +126,10 @@ class LyapunovSpectrum:
         :attr:`LyapunovResult.exponent_fit` (less biased where the growth
         oscillates along a periodic orbit).
     kaplan_yorke : float
-        :func:`kaplan_yorke` of ``exponents``; NaN if it depends on an
-        unresolved one.
+        :func:`kaplan_yorke` of ``exponents_fit`` (of ``exponents`` where a fit
+        is NaN: under two records); NaN if it depends on an unresolved exponent.
+        On a periodic orbit the first exponent is 0 to within the run's noise,
+        so it is 1 or 0 by the sign of that noise.
     divergence : float
         The mean of the divergence trace J(y) over the window. All n exponents
         sum to it (Liouville's formula), so it checks the ones computed.
@@ -137,7 +139,7 @@ class LyapunovSpectrum:
         the contraction beyond that is lost, so the exponent is far too small in
         magnitude, and the vectors after it are orthogonalised against an
         arbitrary replacement (see Notes). With k = n and none flagged so, all are False if their sum misses
-        ``divergence`` by more than 1 % of max(1, |divergence|) (Liouville's formula). An
+        ``divergence`` by more than 1 % of ``max(1, abs(divergence))`` (Liouville's formula). An
         unresolved exponent comes with a ``RuntimeWarning``.
     convergence : ndarray, shape (records, 1 + k)
         Time and the k running estimates at each renormalisation after t_transient.
@@ -207,11 +209,13 @@ def lyapunov_spectrum(
     full = resolved.size == system.n_state
     if full and resolved.all() and not sum_matches(run.exponents, run.divergence):
         resolved[:] = False  # some contraction was lost, and no vector says which
-    _warn_unresolved(run, resolved, system.n_state)
+    _warn_unresolved(run, resolved)
     return LyapunovSpectrum(
         exponents=run.exponents,
         exponents_fit=fits,
-        kaplan_yorke=_resolved_kaplan_yorke(run.exponents, resolved),
+        kaplan_yorke=_resolved_kaplan_yorke(
+            np.where(np.isfinite(fits), fits, run.exponents), resolved
+        ),
         divergence=run.divergence,
         resolved=resolved,
         convergence=run.convergence,
@@ -229,9 +233,8 @@ def lyapunov_spectrum(
 lyapunov_spectrum.__doc__ = _SPECTRUM_DOC
 
 
-def _warn_unresolved(run, resolved: np.ndarray, n: int) -> None:
-    """A RuntimeWarning for the exponents the steps did not follow, or (all n computed)
-    for a sum that misses the mean divergence (Liouville's formula)."""
+def _warn_unresolved(run, resolved: np.ndarray) -> None:
+    """A RuntimeWarning naming the exponents that are not resolved (``resolved`` False)."""
     if run.status != "ok":
         return
     if not resolved.all():
@@ -248,7 +251,7 @@ def _warn_unresolved(run, resolved: np.ndarray, n: int) -> None:
 
 def sum_matches(exponents: np.ndarray, divergence: float, rel: float = 0.01) -> bool:
     """Whether a full spectrum sums to the mean divergence (Liouville's formula), to
-    ``rel`` of max(1, |divergence|)."""
+    ``rel`` of ``max(1, abs(divergence))``."""
     total = float(np.sum(exponents))
     return abs(total - divergence) <= rel * max(1.0, abs(divergence))
 
@@ -292,7 +295,7 @@ def kaplan_yorke(exponents: np.ndarray | list) -> float:
     """The Lyapunov (Kaplan-Yorke) dimension of a spectrum.
 
     With the exponents sorted in decreasing order and j the largest count whose
-    partial sum S_j = lambda_1 + ... + lambda_j is >= 0, D = j + S_j / |lambda_(j+1)|.
+    partial sum S_j = lambda_1 + ... + lambda_j is >= 0, ``D = j + S_j / abs(lambda_(j+1))``.
 
     Parameters
     ----------
