@@ -49,15 +49,15 @@ _SPECTRUM_DOC = """The k largest Lyapunov exponents from the variational equatio
     rtol, atol : float
         Tolerances of the state (defaults 1e-8 and 1e-10, as ``simulate``).
     renorm_dt : float
-        Minimum time between re-orthonormalisations that are recorded in
-        ``convergence``. The vectors are also re-orthonormalised, unrecorded,
-        whenever their lengths drift apart by a factor 1e6, so a long
-        ``renorm_dt`` costs records, not accuracy.
+        Minimum time between the records of ``convergence``. With k > 1 the
+        vectors are re-orthonormalised after every step whatever it is; with
+        k = 1 the one vector is renormalised at the records.
     k : int
         How many exponents, the largest first: 1 to ``system.n_state``; needed
-        unless ``frame`` gives them. There is no default: where disks stick,
-        only the exponents of the directions that do not stick can be resolved
-        (see Notes). Each vector adds the cost of one more state.
+        unless ``frame`` gives them. There is no default because the cost
+        depends so much on it: where disks stick, the exponents of the stuck
+        directions are of order -1000 and resolving them takes steps of their
+        time scale (see Notes).
     frame : array_like, shape (k, n_state), optional
         The vectors' start (orthonormalised in order); default fixed
         pseudo-random rows (seed 12345) whose first row is the default ``u0`` of
@@ -82,23 +82,19 @@ _SPECTRUM_DOC = """The k largest Lyapunov exponents from the variational equatio
     -----
     **Stick phases.** While a disk sticks, its slip velocities are held by a
     friction slope of order mu / eps: on the presets (eps = 1e-5) the trace of
-    J reaches -3e4 and averages -9000 over the period-1 orbit at eta = 2.0. The
-    directions that a stick phase contracts have exponents of that order, which
-    the steps (sized for the state) do not follow: a vector pointing there
-    decays by the method's damping, not by the flow. Their exponents come out
-    far too small in magnitude (-20 instead of thousands), the run takes many
-    more steps, and ``resolved`` is False. The leading exponents are not
-    affected (there: 0 and -0.2421, as the Floquet multiplier -0.0969 gives).
-    So take k no larger than the directions that do not stick (for one disk
-    that sticks, k = 2).
+    J reaches -3e4 and averages -9000 over the period-1 orbit at eta = 2.0.
+    The two directions a stick phase locks have exponents of that order (there
+    -2570 and -6430, beside 0 and -0.2421). A vector along them forces steps of
+    their time scale: the full spectrum of that orbit took 44 million steps for
+    t = 1300 (85 s), the two leading exponents 158 000 steps for t = 3000
+    (0.2 s). Ask for the stuck directions only when they matter.
 
     Checks (tests/test_lyapunov_spectrum.py): at a stable equilibrium the
     exponents are the real parts of the Jacobian's eigenvalues; on a periodic
-    orbit of period T they are 0 and ``log|mu| / T`` of its Floquet multipliers mu
-    (the ones a stick phase does not crush: the others are below the
-    monodromy's rounding); all n sum to the mean divergence. With ``k = 1`` the
-    result is :func:`largest_lyapunov`'s exponent. A step costs about 1 + k
-    plain ones.
+    orbit the leading ones are 0 and ``log|mu| / T`` of its leading Floquet
+    multiplier; all n sum to ``divergence`` (to 1e-6 relative on the period-1
+    orbit, where that is -9000); the first exponents do not depend on k; with
+    ``k = 1`` the result is :func:`largest_lyapunov`'s exponent.
 
     Examples
     --------
@@ -134,13 +130,13 @@ class LyapunovSpectrum:
         The mean of the divergence trace J(y) over the window. All n exponents
         sum to it (Liouville's formula), so it checks the ones computed.
     resolved : ndarray of bool, shape (k,)
-        False for exponent j if its vector, or one before it, ever shrank below
-        the float range (1e-290) between two orthonormalisations in the window:
-        the contraction beyond that is lost, so the exponent is far too small in
-        magnitude, and the vectors after it are orthogonalised against an
-        arbitrary replacement (see Notes). With k = n and none flagged so, all are False if their sum misses
-        ``divergence`` by more than 1 % of ``max(1, abs(divergence))`` (Liouville's formula). An
-        unresolved exponent comes with a ``RuntimeWarning``.
+        False for exponent j if its vector, or one before it, shrank below the
+        float range (1e-290) within a step of the window: the contraction beyond
+        that is lost, and the vectors after it are orthogonalised against an
+        arbitrary replacement. With k = n and none flagged so, all are False if
+        their sum misses ``divergence`` by more than 1 % of
+        ``max(1, abs(divergence))`` (Liouville's formula). An unresolved
+        exponent comes with a ``RuntimeWarning``.
     convergence : ndarray, shape (records, 1 + k)
         Time and the k running estimates at each renormalisation after t_transient.
     status : str
@@ -204,11 +200,7 @@ def lyapunov_spectrum(
     fits = np.array([
         fit_slope(run.convergence[:, [0, 1 + j]], run.t_start) for j in range(start.shape[0])
     ])  # fmt: skip
-    # a replaced vector is arbitrary, and so is the subspace of the ones after it
-    resolved = np.cumsum(run.vanished) == 0
-    full = resolved.size == system.n_state
-    if full and resolved.all() and not sum_matches(run.exponents, run.divergence):
-        resolved[:] = False  # some contraction was lost, and no vector says which
+    resolved = resolved_flags(run.vanished, run.exponents, run.divergence, system.n_state)
     _warn_unresolved(run, resolved)
     return LyapunovSpectrum(
         exponents=run.exponents,
@@ -240,13 +232,28 @@ def _warn_unresolved(run, resolved: np.ndarray) -> None:
     if not resolved.all():
         bad = ", ".join(str(j + 1) for j in np.flatnonzero(~resolved))
         warnings.warn(
-            f"lyapunov_spectrum: exponent(s) {bad} of {resolved.size} are not resolved: a stick "
-            "phase contracted their directions beyond the float range, so the values are far "
-            "too small in magnitude. The mean divergence, which all exponents sum to, is "
-            f"{run.divergence:.6g}",
+            f"lyapunov_spectrum: exponent(s) {bad} of {resolved.size} are not resolved: a vector "
+            "shrank beyond the float range within a step, or the sum misses the mean divergence "
+            f"{run.divergence:.6g}, which all exponents sum to; try a smaller rtol or "
+            "tangent_atol",
             RuntimeWarning,
             stacklevel=3,
         )
+
+
+def resolved_flags(
+    vanished: np.ndarray, exponents: np.ndarray, divergence: float, n: int
+) -> np.ndarray:
+    """Which of k exponents are resolved (see :attr:`LyapunovSpectrum.resolved`).
+
+    ``vanished`` counts, per vector, the steps after which it had to be replaced;
+    ``n`` is the state's size (the sum rule applies when all n are computed).
+    """
+    # a replaced vector is arbitrary, and so is the subspace of the ones after it
+    resolved = np.cumsum(vanished) == 0
+    if resolved.size == n and resolved.all() and not sum_matches(exponents, divergence):
+        resolved[:] = False  # some contraction was lost, and no vector says which
+    return resolved
 
 
 def sum_matches(exponents: np.ndarray, divergence: float, rel: float = 0.01) -> bool:
