@@ -37,7 +37,11 @@ class Orbit:
         The period in time (NaN when the map could not be evaluated).
     multipliers : ndarray of complex, shape (n_state - 1,)
         Nontrivial Floquet multipliers: the eigenvalues of the return map's
-        Jacobian in section coordinates, largest modulus first.
+        Jacobian in section coordinates, largest modulus first. Those below ~1e-8
+        are the Jacobian's rounding, not values: a stick phase crushes the
+        directions it locks far below the float range (at eta = 2.0 to about
+        e^-24 800 and e^-62 000; :func:`~stickslip_fast.lyapunov_spectrum` resolves
+        them as exponents, docs/lyapunov.md).
     stable : bool
         Converged and every multiplier inside the unit circle.
     jacobian : ndarray, shape (n_state - 1, n_state - 1)
