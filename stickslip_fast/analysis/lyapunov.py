@@ -148,19 +148,11 @@ def largest_lyapunov(
         max_steps,
     )  # fmt: skip
     conv = run.convergence[:, :2]
-    t_start = run.t_start
     return LyapunovResult(
         exponent=float(run.exponents[0]),
-        exponent_fit=fit_slope(conv, t_start),
+        exponent_fit=fit_slope(conv, run.t_start),
         convergence=conv,
-        status=run.status,
-        t_start=t_start,
-        t_final=run.t_final,
-        n_steps=run.n_steps,
-        n_rejected=run.n_rejected,
-        final_state=run.final_state,
-        runtime=run.runtime,
-        settings=run.settings,
+        **run.run_fields(),
     )
 
 

@@ -367,6 +367,14 @@ class TangentRun:
     runtime: float
     settings: dict
 
+    def run_fields(self) -> dict:
+        """The fields every Lyapunov result takes from the run as they are, by name."""
+        return dict(
+            status=self.status, t_start=self.t_start, t_final=self.t_final,
+            n_steps=self.n_steps, n_rejected=self.n_rejected, final_state=self.final_state,
+            runtime=self.runtime, settings=self.settings,
+        )  # fmt: skip
+
 
 def run_tangents(
     system, y_init, frame, t_end, t_transient, rtol, atol, tangent_atol, renorm_dt, max_steps

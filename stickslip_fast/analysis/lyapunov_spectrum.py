@@ -211,14 +211,7 @@ def lyapunov_spectrum(
         divergence=run.divergence,
         resolved=resolved,
         convergence=run.convergence,
-        status=run.status,
-        t_start=run.t_start,
-        t_final=run.t_final,
-        n_steps=run.n_steps,
-        n_rejected=run.n_rejected,
-        final_state=run.final_state,
-        runtime=run.runtime,
-        settings=dict(run.settings, k=int(start.shape[0])),
+        **dict(run.run_fields(), settings=dict(run.settings, k=int(start.shape[0]))),
     )
 
 
