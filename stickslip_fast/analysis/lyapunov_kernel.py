@@ -294,12 +294,15 @@ def lyapunov_kernel(
     averaging starts), then at step ends at least ``renorm_dt`` apart, recording
     (t, running estimates) into ``conv_t``/``conv_est`` (records, k); in between,
     without a record, after every step for k > 1, and for k = 1 when the norm
-    leaves [1e-100, 1e100]. Outputs:
-    ``logs`` (the k log-growth sums), ``vanished`` (for each vector, how often in
-    the window it shrank below the float range between two orthonormalisations), ``stats`` = (steps, rejected, records),
-    ``fstats`` = (t_start, t_final, 1 if the averaging started else 0, the integral of
-    the divergence trace J(y) over the window by the trapezoid rule on the steps), ``y_end``. ``variant`` selects the kernel
-    as in :func:`~stickslip_fast.core.variational.propagate_tangents`.
+    leaves [1e-100, 1e100].
+
+    Outputs: ``logs`` (the k log-growth sums); ``vanished`` (for each vector, how
+    often in the window it shrank below the float range between two
+    orthonormalisations); ``stats`` = (steps, rejected, records); ``fstats`` =
+    (t_start, t_final, 1 if the averaging started else 0, the integral of the
+    divergence trace J(y) over the window by the trapezoid rule on the steps);
+    ``y_end``. ``variant`` selects the kernel as in
+    :func:`~stickslip_fast.core.variational.propagate_tangents`.
     """
     n = y0.size
     k = frame.shape[0]
@@ -350,8 +353,8 @@ class TangentRun:
 
     ``exponents``: the k plain Benettin averages; ``divergence``: the mean of trace
     J(y) over the window; ``vanished``: for each vector, how often in the window
-    it shrank below the float range between two orthonormalisations; ``convergence``: (records, 1 + k), time and the k running
-    estimates.
+    it shrank below the float range between two orthonormalisations;
+    ``convergence``: (records, 1 + k), time and the k running estimates.
     """
 
     exponents: np.ndarray
