@@ -31,7 +31,7 @@ Branch files (``stickslip-fast continue``, :meth:`Branch.to_hdf5`) are drawn ove
 against the parameter, black for orbits and grey for equilibria, solid where
 stable and dashed where unstable, with each located bifurcation marked and
 labelled (F fold, PD period-doubling, NS Neimark-Sacker, H Hopf, S stick phase, G section
-grazing). Only the orbit's first section point is continued, so a period-p
+grazing, SB symmetry-breaking). Only the orbit's first section point is continued, so a period-p
 branch is one curve through one of its p points. ``--multipliers`` adds a
 panel with the largest |Floquet multiplier| of every orbit branch (1 marks the
 stability boundary) and the largest real part of the eigenvalues of every

@@ -52,6 +52,7 @@ from .bifurcation.continuation import (
 from .bifurcation.curve import Codim2Point, Curve, continue_bifurcation
 from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit, stick_phases
 from .bifurcation.stable_manifold import manifold_seeds, stable_manifold
+from .bifurcation.synchrony import SyncStability, sync_stability
 from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
 from .model.system import PRESETS, SWEEPABLE, SynchronousStartWarning, System
@@ -85,6 +86,8 @@ __all__ = [
     "phases_from_events",
     "SyncResult",
     "sync_error",
+    "sync_stability",
+    "SyncStability",
     "find_orbit",
     "stick_phases",
     "Orbit",

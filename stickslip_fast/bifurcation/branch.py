@@ -42,7 +42,8 @@ class Bifurcation:
     @property
     def label(self) -> str:
         return {"fold": "F", "period-doubling": "PD", "neimark-sacker": "NS",
-                "section-grazing": "G", "hopf": "H", "stick-phase": "S"}[self.kind]  # fmt: skip
+                "section-grazing": "G", "hopf": "H", "stick-phase": "S",
+                "symmetry-breaking": "SB"}[self.kind]  # fmt: skip
 
 
 @dataclass

@@ -24,6 +24,7 @@ from .multishoot import (
     remesh,
 )
 from .multishoot_orbit import initial_segments, newton_multiple
+from .orbit_record import multipliers_stable
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
 from .walk_args import WalkSettings
@@ -162,7 +163,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, walk: WalkS
     return Branch(
         system=system0, param=param, period=period, values=np.array(vals),
         points=np.array(pts), T=np.array(Ts), multipliers=mults,
-        stable=np.all(np.abs(mults) < 1.0, axis=1),
+        stable=multipliers_stable(system0, mults),
         bifurcations=[Bifurcation(*b) for b in bifs], status=status,
         stick_count=np.array(counts, dtype=np.int64) if walk.stick_events else None,
         stick_time=np.array(times) if walk.stick_events else None, segments=segs,

@@ -9,7 +9,7 @@ import numpy as np
 from ..model.system import System
 from .equilibria import EQUILIBRIUM_SPEED
 from .multishoot import MAX_SEGMENTS, MESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh
-from .orbit_record import Orbit
+from .orbit_record import Orbit, multipliers_stable
 from .returnmap import SECTION_INDEX, _field, _minimal_period, return_map
 
 
@@ -191,7 +191,7 @@ def _newton_orbit(system, mesh, Y, T, period, tol, max_iter, kw):
     converged = status == "converged"
     return Orbit(
         system=system, period=period, points=points, times=times, T=float(T),
-        multipliers=mult, stable=bool(converged and np.all(np.abs(mult) < 1.0)),
+        multipliers=mult, stable=bool(converged and multipliers_stable(system, mult)),
         jacobian=product(factors), residual=float(res), iterations=total_it,
         converged=converged, status=status, message=message, history=history,
         segments=(np.array(ms.mesh, dtype=float), np.array(Y, dtype=float)),

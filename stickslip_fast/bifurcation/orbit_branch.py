@@ -14,6 +14,7 @@ from .arclength import _locate_change, pseudo_arclength
 from .branch import Bifurcation, Branch
 from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS, MESH_LIMIT
 from .multishoot_branch import append_branch, continue_multiple, ms_start
+from .orbit_record import multipliers_stable
 from .orbits import (
     EQUILIBRIUM_SPEED,
     SECTION_INDEX,
@@ -24,6 +25,7 @@ from .orbits import (
     stick_phases,
 )
 from .progress import points_bar
+from .synchrony import in_phase_walk
 from .walk_args import WalkSettings, _check_args
 
 #: Tighter settings :func:`continue_orbit` goes on with, in turn, where the corrector fails
@@ -451,6 +453,8 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
     x0 = np.r_[orbit.points[0][mask], lam0]
     evaluate(x0)
     last = {}
+    # an in-phase branch also marks where a transverse multiplier passes +1
+    evaluate, refine, marks = in_phase_walk(orbit, system_at, full, evaluate, refine)
 
     def keep_tangent(x, data, walk):  # the tangent at each accepted point, oriented onwards
         last["t"] = walk.t.copy()
@@ -458,7 +462,7 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
 
     xs, mults, bifs, status = pseudo_arclength(
         evaluate, x0, direction, (lo, hi), ds=walk.ds, ds_min=walk.ds_min, ds_max=walk.ds_max,
-        max_points=walk.max_points, tol=tol, jump=jump, refine=refine, stop=keep_tangent,
+        max_points=walk.max_points, tol=tol, jump=jump, refine=refine, stop=keep_tangent, **marks,
     )  # fmt: skip
     T = _return_times(
         xs, periods, lambda x: return_map(system_at(x[-1]), full(x), p, tangents=False, **kw)[2][-1]
@@ -487,7 +491,7 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
         points=points,
         T=T,
         multipliers=mults,
-        stable=np.all(np.abs(mults) < 1.0, axis=1),
+        stable=multipliers_stable(system0, mults),
         bifurcations=[Bifurcation(k, v, i, full(x)) for k, v, i, x in bifs],
         status=status,
         stick_count=stick_count,

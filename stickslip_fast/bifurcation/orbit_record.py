@@ -19,6 +19,20 @@ ORBIT_STATUSES = (
 )
 
 
+def multipliers_stable(system: System, multipliers: np.ndarray) -> np.ndarray | bool:
+    """Whether orbits with these multipliers (shape (..., n_state - 1)) are stable.
+
+    Every multiplier inside the unit circle, except for N >= 2 disks on a constant
+    belt: uncoupled disks each keep their own phase, so N - 1 multipliers are exactly
+    1 (a shift of one disk along its orbit is another periodic orbit) and the orbit
+    is never asymptotically stable, however the rounding places them (1 - ~1e-6).
+    """
+    inside = np.all(np.abs(multipliers) < 1.0, axis=-1)
+    if system.n_oscillators >= 2 and not system.is_dc_motor:
+        inside = np.zeros_like(inside)
+    return inside
+
+
 @dataclass
 class Orbit:
     """A periodic orbit found by :func:`find_orbit`.
@@ -43,7 +57,10 @@ class Orbit:
         e^-24 800 and e^-62 000; :func:`~stickslip_fast.lyapunov_spectrum` resolves
         them as exponents, docs/lyapunov.md).
     stable : bool
-        Converged and every multiplier inside the unit circle.
+        Converged and every multiplier inside the unit circle. Never True for
+        N >= 2 disks on a constant belt: they are uncoupled, so N - 1 multipliers
+        are exactly 1 (each disk's phase is free; computed as 1 - ~1e-6), and the
+        orbit is neutrally, not asymptotically, stable (:func:`multipliers_stable`).
     jacobian : ndarray, shape (n_state - 1, n_state - 1)
         D P^p at ``points[0]`` in section coordinates (the state without dx1).
     residual : float

@@ -59,7 +59,7 @@ from .equilibria import (  # noqa: F401
 )
 from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS
 from .multishoot_orbit import find_orbit_multiple
-from .orbit_record import ORBIT_STATUSES, Orbit
+from .orbit_record import ORBIT_STATUSES, Orbit, multipliers_stable
 from .returnmap import (  # noqa: F401
     _DEFAULT_ATOL,
     _DEFAULT_RTOL,
@@ -400,7 +400,7 @@ def _orbit(system, period, z, pts, times, jac, res, it, status, message, history
         times=np.asarray(times, dtype=float),
         T=float(times[-1]),
         multipliers=mult,
-        stable=bool(converged and np.all(np.abs(mult) < 1.0)),
+        stable=bool(converged and multipliers_stable(system, mult)),
         jacobian=jac,
         residual=float(res),
         iterations=int(it),

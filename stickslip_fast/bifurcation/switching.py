@@ -1,4 +1,5 @@
-"""Branch switching at a period-doubling: the doubled orbit's start, and its Newton solve."""
+"""Branch switching at a period-doubling (the doubled orbit) and at a symmetry-breaking
+point (the orbits with the disks apart): their starts, and their Newton solves."""
 
 from __future__ import annotations
 
@@ -18,12 +19,22 @@ from .orbits import (
     find_orbit,
     return_map,
 )
+from .returnmap import _field
+from .synchrony import SYMMETRY_BREAKING, synchronous_point, transverse_block
 
 # ------------------------------------------------------------ branch switching
 #: Offsets along the -1 eigenvector tried by :func:`switch_branch`, largest first: the
 #: doubled orbit's amplitude grows like sqrt(|lambda - lambda_PD|), and in the stiff
 #: friction layer the quadratic regime can be very narrow.
 SWITCH_DELTAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
+
+#: At a symmetry-breaking point an offset whose predictor already has max abs(G) below
+#: FLAT * tol is too small to tell the branch apart (measured: 1e-7 and 2e-7 gave 0.1-0.5
+#: tol and a spurious "orbit" at the point itself; 1e-6 gave 12-18 tol and the branch).
+FLAT = 10.0
+
+#: The bifurcation kinds :func:`switch_branch` switches at.
+SWITCH_KINDS = ("period-doubling", SYMMETRY_BREAKING)
 
 
 def period_doubling_start(
@@ -72,19 +83,13 @@ def period_doubling_start(
     return bool(ok), x
 
 
-def switch_branch(
-    branch: Branch,
-    bifurcation: Bifurcation | int,
-    *,
-    deltas: tuple[float, ...] = SWITCH_DELTAS,
-    tol: float = 1e-10,
-    rtol: float = 1e-11,
-    atol: float = 1e-13,
-    fd_step: float = 1e-7,
-    shooting: str = "single",
-    segments: int = DEFAULT_SEGMENTS,
-) -> Orbit:
-    """The period-doubled orbit born at a period-doubling point of an orbit branch.
+#: :func:`switch_branch`'s docstring (kept out of the body: the layout rule counts lines).
+_SWITCH_BRANCH_DOC = """The orbit born at a period-doubling or symmetry-breaking point of an orbit branch.
+
+    At a period-doubling, the period-doubled orbit; at a symmetry-breaking point of
+    a branch of in-phase orbits (docs/orbits.md, "In-phase orbits"), one of the two
+    orbits of the same period with the disks apart (the other is it with the disks
+    swapped), started along the transverse eigenvector of the multiplier +1.
 
     Parameters
     ----------
@@ -92,10 +97,16 @@ def switch_branch(
         A branch of period-p orbits (:func:`continue_orbit`).
     bifurcation : Bifurcation or int
         One of ``branch.bifurcations`` (or its index there), of kind
-        "period-doubling".
+        "period-doubling" or "symmetry-breaking".
     deltas : tuple of float
-        Offsets along the -1 eigenvector to try, in order (:func:`period_doubling_start`).
-        The first that gives a fixed point of P^2p that is not one of P^p wins.
+        Offsets along the eigenvector to try, in order (:func:`period_doubling_start`).
+        The first that gives a fixed point of P^2p that is not one of P^p wins. At a
+        symmetry-breaking point they are tried smallest first, and the first that
+        gives a fixed point of P^p with the disks apart wins; an offset too small to
+        resolve (the predictor's residual below 10 ``tol``: the normal form is
+        cubic) is skipped. The difference between the disks grows like
+        sqrt(abs(lambda - lambda_SB)): at the defaults 1e-6 wins, 0.002-0.004 in eta
+        from the point on the paper's sets.
     tol, rtol, atol, fd_step
         As for :func:`continue_orbit`.
     shooting : {"single", "multiple", "auto"}
@@ -112,8 +123,9 @@ def switch_branch(
     Returns
     -------
     Orbit
-        Of period 2p, at a parameter value near the bifurcation's (``orbit.system``
-        holds it), polished by :func:`find_orbit`. Continue it away from the
+        Of period 2p (period p at a symmetry-breaking point), at a parameter value
+        near the bifurcation's (``orbit.system`` holds it), polished by
+        :func:`find_orbit`. Continue it away from the
         bifurcation with ``continue_orbit(orbit, branch.param, bounds,
         direction=np.sign(getattr(orbit.system, branch.param) - bifurcation.value))``.
         If no offset works, the orbit is returned with ``converged = False``
@@ -123,10 +135,28 @@ def switch_branch(
     ------
     ValueError
         For a branch of equilibria, a bifurcation that is not a period-doubling
-        of this branch, non-positive deltas, an unknown ``shooting`` or a bad
-        ``segments`` (naming the argument).
+        or symmetry-breaking point of this branch (or a symmetry-breaking point
+        off the in-phase orbits), non-positive deltas, an unknown ``shooting`` or
+        a bad ``segments`` (naming the argument).
     """
+
+
+def switch_branch(
+    branch: Branch,
+    bifurcation: Bifurcation | int,
+    *,
+    deltas: tuple[float, ...] = SWITCH_DELTAS,
+    tol: float = 1e-10,
+    rtol: float = 1e-11,
+    atol: float = 1e-13,
+    fd_step: float = 1e-7,
+    shooting: str = "single",
+    segments: int = DEFAULT_SEGMENTS,
+) -> Orbit:
     bifurcation = _check_switch(branch, bifurcation, deltas, shooting, segments)
+    polish = dict(tol=tol, rtol=rtol, atol=atol, shooting=shooting, segments=int(segments))
+    if bifurcation.kind == SYMMETRY_BREAKING:
+        return _switch_apart(branch, bifurcation, deltas, fd_step, polish)
     p = branch.period
     mask = np.arange(branch.system.n_state) != SECTION_INDEX
     lam_pd = float(bifurcation.value)
@@ -136,7 +166,6 @@ def switch_branch(
     evaluate2, full, system_at, _ = _orbit_evaluator(branch.system, branch.param, 2 * p, rtol,
                                                      atol, fd_step)  # fmt: skip
     x_pd = np.r_[z_pd[mask], lam_pd]
-    polish = dict(tol=tol, rtol=rtol, atol=atol, shooting=shooting, segments=int(segments))
     last, tried = None, []
     for delta in deltas:
         ok, x = period_doubling_start(evaluate2, x_pd, v, delta, tol=tol)
@@ -147,7 +176,13 @@ def switch_branch(
         last = find_orbit(system_at(x[-1]), full(x), 2 * p, **polish)
         if last.converged:
             return last
-    return _no_doubled_orbit(last, s_pd, z_pd, p, tried, tol, rtol, atol)
+    offsets = ", ".join(f"{d:g}" for d in tried)
+    return _not_found(last, s_pd, z_pd, 2 * p, tol, rtol, atol,
+                      f"no period-{2 * p} orbit found along the -1 eigenvector (offsets "
+                      f"tried: {offsets})")  # fmt: skip
+
+
+switch_branch.__doc__ = _SWITCH_BRANCH_DOC
 
 
 def _minus_one_vector(s_pd, z_pd, p, rtol, atol) -> np.ndarray:
@@ -159,16 +194,13 @@ def _minus_one_vector(s_pd, z_pd, p, rtol, atol) -> np.ndarray:
     return np.real(vecs[:, int(np.argmin(np.abs(mu + 1.0)))])
 
 
-def _no_doubled_orbit(last, s_pd, z_pd, p, tried, tol, rtol, atol) -> Orbit:
+def _not_found(last, system, z, period, tol, rtol, atol, message) -> Orbit:
     """The unconverged Orbit :func:`switch_branch` returns when no offset worked."""
     if last is None:
-        last = find_orbit(s_pd, z_pd, 2 * p, tol=tol, rtol=rtol, atol=atol, max_iter=0)
+        last = find_orbit(system, z, period, tol=tol, rtol=rtol, atol=atol, max_iter=0)
     last.converged = False
     last.stable = False
-    last.message = (
-        f"no period-{2 * p} orbit found along the -1 eigenvector (offsets tried: "
-        f"{', '.join(f'{d:g}' for d in tried)})"
-    )
+    last.message = message
     if last.status == "converged":
         last.status = "no-progress"
     return last
@@ -193,9 +225,12 @@ def _check_switch(branch, bifurcation, deltas, shooting, segments) -> Bifurcatio
                 f"{len(branch.bifurcations)} bifurcations"
             )
         bifurcation = branch.bifurcations[int(bifurcation)]
-    if not isinstance(bifurcation, Bifurcation) or bifurcation.kind != "period-doubling":
+    if not isinstance(bifurcation, Bifurcation) or bifurcation.kind not in SWITCH_KINDS:
         kind = getattr(bifurcation, "kind", type(bifurcation).__name__)
-        raise ValueError(f"bifurcation must be a period-doubling of the branch, got {kind!r}")
+        raise ValueError(
+            f"bifurcation must be a period-doubling or symmetry-breaking point of the branch, "
+            f"got {kind!r}"
+        )
     if not deltas or not all(isinstance(d, (int, float)) and math.isfinite(d) and d > 0
                              for d in deltas):  # fmt: skip
         raise ValueError(f"deltas must be finite numbers > 0, got {deltas!r}")
@@ -204,3 +239,53 @@ def _check_switch(branch, bifurcation, deltas, shooting, segments) -> Bifurcatio
     if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
         raise ValueError(f"segments must be an integer >= 1, got {segments!r}")
     return bifurcation
+
+
+def _switch_apart(branch: Branch, bif: Bifurcation, deltas, fd_step: float, polish) -> Orbit:
+    """switch_branch at a symmetry-breaking point: an orbit of the same period with the
+    disks apart.
+
+    With Phi_d a = a (the transverse multiplier +1), the return map's eigenvector is
+    v = P a - (a_dx / f_dx1) f (P a: a on disk 1, -a on disk 2; :mod:`.synchrony`), and
+    the branch with the disks apart leaves the in-phase one tangent to (v, 0). The
+    predictor z* + delta v / abs(P a) is corrected within the hyperplane through it
+    normal to P a, which no in-phase point reaches (P a is orthogonal to them)."""
+    p, system = branch.period, branch.system
+    rtol, atol, tol = polish["rtol"], polish["atol"], polish["tol"]
+    mask = np.arange(system.n_state) != SECTION_INDEX
+    lam = float(bif.value)
+    z = np.asarray(bif.point, dtype=float)
+    s_sb = dataclasses.replace(system, **{branch.param: lam})
+    if not synchronous_point(s_sb, z):
+        raise ValueError("bifurcation: a symmetry-breaking point must lie on in-phase orbits")
+    st, _, _, jac = return_map(s_sb, z, p, rtol=rtol, atol=atol)
+    if st != "ok":
+        raise ValueError(f"the return map fails at the bifurcation point: {st}")
+    mu, vecs = np.linalg.eig(transverse_block(s_sb, z, jac)[0])
+    a = np.real(vecs[:, int(np.argmin(np.abs(mu - 1.0)))])
+    pair = np.zeros(system.n_state)
+    pair[0:4], pair[4:8] = a, -a
+    f = _field(s_sb, z)
+    v = pair - pair[SECTION_INDEX] / f[SECTION_INDEX] * f
+    size = float(np.linalg.norm(pair[mask]))
+    normal = np.r_[pair[mask] / size, 0.0]
+    evaluate, full, system_at, _ = _orbit_evaluator(system, branch.param, p, rtol, atol, fd_step)
+    last, tried = None, []
+    for delta in sorted(deltas):  # the smallest that resolves the branch: nearest the point
+        x_pred = np.r_[z[mask], lam] + delta * np.r_[v[mask], 0.0] / size
+        tried.append(delta)
+        ok, G, _, _ = evaluate(x_pred)
+        # too small an offset: the map is flat to ~tol there (its normal form is cubic), so
+        # the shifted in-phase point passes for a fixed point of its own
+        if not ok or np.max(np.abs(G)) <= FLAT * tol:
+            continue
+        ok, x, _, _ = _correct(evaluate, x_pred, normal, x_pred, tol, 8)
+        if not ok or x[-1] == lam or synchronous_point(system_at(x[-1]), full(x), 0.01 * delta):
+            continue
+        last = find_orbit(system_at(x[-1]), full(x), p, **polish)
+        if last.converged and not synchronous_point(last.system, last.points[0], 0.01 * delta):
+            return last
+    offsets = ", ".join(f"{d:g}" for d in tried)
+    return _not_found(last, s_sb, z, p, tol, rtol, atol,
+                      f"no period-{p} orbit with the disks apart found along the transverse "
+                      f"eigenvector (offsets tried: {offsets})")  # fmt: skip

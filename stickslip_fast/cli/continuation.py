@@ -105,28 +105,32 @@ def _curves(branch, curve, tol, stick_events, args, say):
 
 def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, continue_orbit):
     """[continue].switch: from each period-doubling of ``branch``, the doubled orbit's
-    branch, continued away from it, into OUTPUT's stem + ``.pd<k>.h5``."""
+    branch, and from each symmetry-breaking point, the branch with the disks apart, each
+    continued away from it, into OUTPUT's stem + ``.pd<k>.h5`` / ``.sb<k>.h5``."""
     out = Path(args.output)
-    pds = [b for b in branch.bifurcations if b.kind == "period-doubling"]
-    if not pds:
-        say("switch: the branch has no period-doubling")
-    for k, pd in enumerate(pds, start=1):
-        say(f"switching at the period-doubling at {branch.param} = {pd.value:.10g} ...")
-        orbit = switch_branch(branch, pd, tol=settings.get("tol", 1e-10),
-                              shooting=settings.get("shooting", "single"),
-                              **{k: settings[k] for k in ("segments",) if k in settings})  # fmt: skip
-        if not orbit.converged:
-            print(f"period-doubling {k} at {pd.value:.10g}: {orbit.message}", file=sys.stderr)
-            continue
-        value = getattr(orbit.system, branch.param)
-        away = 1.0 if value >= pd.value else -1.0
-        doubled = continue_orbit(orbit, branch.param, bounds, direction=away, **settings)
-        path = out.with_name(f"{out.stem}.pd{k}{out.suffix or '.h5'}")
-        doubled.to_hdf5(path)
-        if not args.quiet:
-            print(f"file:      {path}  (period-{orbit.period} branch from the "
-                  f"period-doubling at {pd.value:.10g})")  # fmt: skip
-            print(doubled.summary())
+    found = False
+    for kind, tag in (("period-doubling", "pd"), ("symmetry-breaking", "sb")):
+        bifs = [b for b in branch.bifurcations if b.kind == kind]
+        found = found or bool(bifs)
+        for k, bif in enumerate(bifs, start=1):
+            say(f"switching at the {kind} at {branch.param} = {bif.value:.10g} ...")
+            orbit = switch_branch(branch, bif, tol=settings.get("tol", 1e-10),
+                                  shooting=settings.get("shooting", "single"),
+                                  **{key: settings[key] for key in ("segments",) if key in settings})  # fmt: skip
+            if not orbit.converged:
+                print(f"{kind} {k} at {bif.value:.10g}: {orbit.message}", file=sys.stderr)
+                continue
+            value = getattr(orbit.system, branch.param)
+            away = 1.0 if value >= bif.value else -1.0
+            new = continue_orbit(orbit, branch.param, bounds, direction=away, **settings)
+            path = out.with_name(f"{out.stem}.{tag}{k}{out.suffix or '.h5'}")
+            new.to_hdf5(path)
+            if not args.quiet:
+                print(f"file:      {path}  (period-{orbit.period} branch from the "
+                      f"{kind} at {bif.value:.10g})")  # fmt: skip
+                print(new.summary())
+    if not found:
+        say("switch: the branch has no period-doubling and no symmetry-breaking point")
 
 
 def _orbit_from_config(cfg: RunConfig, param: str, period, say):

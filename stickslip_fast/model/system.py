@@ -322,8 +322,8 @@ class SynchronousStartWarning(UserWarning):
     status are right for that motion, but an in-phase orbit can be unstable across
     the disks (e.g. the symmetric set at eta = 5: leading multiplier 1.09), so the
     slightest difference between the disks would leave it. Give the disks
-    different starts (the paper's Figs. 14-18 do) or check the orbit's multipliers
-    with :func:`~stickslip_fast.find_orbit`.
+    different starts (the paper's Figs. 14-18 do) or check the orbit's stability
+    across the disks with :func:`~stickslip_fast.sync_stability`.
     """
 
 
@@ -335,7 +335,8 @@ def warn_if_synchronous(system: System, what: str, stacklevel: int) -> None:
             f"{what} puts all {system.n_oscillators} disks in the same state on one DC "
             "motor, so they stay identical to the last bit and the result describes in-phase "
             "motion only, which can be unstable across the disks; give the disks different "
-            "starts (y0), or check the orbit's multipliers with find_orbit",
+            "starts (y0), or check the orbit's stability across the disks with "
+            "sync_stability(find_orbit(...))",
             SynchronousStartWarning,
             stacklevel=stacklevel + 1,
         )
