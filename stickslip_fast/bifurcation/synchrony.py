@@ -236,7 +236,8 @@ def sync_stability(orbit: Orbit, *, tol: float = SYNC_TOL) -> SyncStability:
     >>> two = ssf.System.preset("symmetric", drive="dc-motor", n_oscillators=2, eta=5.0)
     >>> run = ssf.simulate(two, 3000, 2000)      # from rest: the disks stay alike
     >>> s = ssf.sync_stability(ssf.find_orbit(two, run))
-    >>> s.transverse[0], s.longitudinal_stable   # (1.0923...+0j, True): unstable across
+    >>> round(float(s.transverse[0].real), 4), s.transverse_stable, s.longitudinal_stable
+    (1.0923, False, True)
     """
     if not isinstance(orbit, Orbit):
         raise TypeError(f"orbit must be an Orbit (from find_orbit), got {type(orbit).__name__}")
