@@ -104,7 +104,7 @@ def test_continuation_marks_the_symmetry_breaking_point(in_phase_branch, tmp_pat
     assert len(sb) == 1 and sb[0].label == "SB"
     # the reference: a secant on the transverse multiplier of orbits found at
     # eta = 4.7638 and 4.7640 with rtol 1e-12, atol 1e-14, tangent_atol 1e-12 gave
-    # 4.7638949 (the defaults give 4.7638974: the tangents' accuracy); measured 4.7638986
+    # 4.7638949 (the defaults give 4.7638974: the tangents' accuracy); measured 4.7638980
     assert abs(sb[0].value - 4.7638949) < 1e-5
     i = sb[0].index
     assert branch.stable[i] and not branch.stable[i + 1]
@@ -213,6 +213,7 @@ def test_cli_continue_switches_at_the_symmetry_breaking_point(tmp_path, capsys):
         "[initial]\ny0 = [0, 0, 0, 0, 0, 0, 0, 0, 0]\n"  # in phase, on purpose
         "[integration]\nt_end = 3000.0\nt_transient = 2000.0\n"
         '[continue]\nparam = "eta"\nbounds = [4.7, 4.8]\nswitch = true\n'
+        'param2 = "beta"\nbounds2 = [0.0014, 0.0015]\nkinds2 = ["symmetry-breaking"]\n'
     )
     out = tmp_path / "b.h5"
     with warnings.catch_warnings():
@@ -224,5 +225,42 @@ def test_cli_continue_switches_at_the_symmetry_breaking_point(tmp_path, capsys):
     assert apart.period == 1 and 0 < apart.values[0] - sb.value < 0.01
     assert apart.values[-1] == pytest.approx(4.8) and apart.stable.all()
     assert not any(synchronous_point(apart.system, p) for p in apart.points)
+    curve = ssf.Curve.from_hdf5(tmp_path / "b.curve1.h5")
+    assert curve.kind == "symmetry-breaking" and curve.status == "bounds"
+    assert curve.values[-1, 1] == pytest.approx(0.0015)
+    assert curve.values[-1, 0] == pytest.approx(sb.value - 0.15, abs=0.02)  # dbeta/deta -6.6e-4
     printed = capsys.readouterr().out
     assert "b.sb1.h5" in printed and "SB  symmetry-breaking" in printed
+
+
+def test_a_branch_of_in_phase_orbits_stays_in_phase():
+    # next to the pitchfork the orbits with the disks apart lie ~1e-6 away; the walk is
+    # projected onto the in-phase states (without: 6e-9 apart here, and from a start
+    # 1e-7 off the subspace at beta = 0.0014106 a step of 0.01 landed on the orbits apart)
+    system = _sym(2, 4.7419).replace(beta=0.00141)
+    branch = ssf.continue_orbit(_in_phase_orbit(system), "eta", (4.7419, 4.7619))
+    assert [b.kind for b in branch.bifurcations] == ["symmetry-breaking"]
+    for p in branch.points:
+        assert np.max(np.abs(p[:4] - p[4:8])) < 1e-12  # measured 3e-17
+
+
+def test_the_curve_of_symmetry_breaking_points_in_the_motor_load(in_phase_branch, tmp_path):
+    orbit, branch = in_phase_branch
+    (sb,) = [b for b in branch.bifurcations if b.kind == "symmetry-breaking"]
+    curve = ssf.continue_bifurcation(branch, sb, "beta", (0.0014, 0.01), max_points=12)
+    assert curve.kind == "symmetry-breaking" and len(curve.values) == 12
+    assert curve.values[-1, 1] > 0.00165  # measured (4.3337, 0.0016852)
+    for i in (6, 11):
+        eta, beta = curve.values[i]
+        system = orbit.system.replace(eta=eta, beta=beta)
+        # at the curve's parameters a transverse multiplier is 1 (find_orbit and the split)
+        on = ssf.sync_stability(ssf.find_orbit(system, curve.points[i]))
+        assert np.min(np.abs(on.transverse - 1.0)) < 5e-6  # measured 3e-7, 5e-7
+        # and the one-parameter continuation at that beta locates its SB point there
+        below = ssf.find_orbit(system.replace(eta=eta - 0.01), curve.points[i])
+        one = ssf.continue_orbit(below, "eta", (eta - 0.01, eta + 0.01))
+        (sb1,) = [b for b in one.bifurcations if b.kind == "symmetry-breaking"]
+        assert abs(sb1.value - eta) < 1e-5  # measured 4.5e-7, 1.1e-6
+    back = ssf.Curve.from_hdf5(curve.to_hdf5(tmp_path / "sb.h5"))
+    assert back.kind == "symmetry-breaking"
+    np.testing.assert_array_equal(back.values, curve.values)

@@ -29,8 +29,10 @@ from .foldcurve import CURVE_KINDS, follow_curve
 from .nscurve import NS_KIND, follow_ns_curve
 from .progress import points_bar
 from .returnmap import SECTION_INDEX, return_map
+from .sbcurve import SB_KIND, follow_sb_curve
 from .stickcurve import STICK_KIND, follow_stick_curve, nearest_stick_event
 from .stickphases import GRAZE_TOL, section_graze_margin, stick_phases
+from .synchrony import synchronous_point
 
 
 class StickWatch:
@@ -104,8 +106,8 @@ def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
 
 #: :func:`continue_bifurcation`'s docstring (kept out of the function body, as for
 #: :func:`~stickslip_fast.continue_orbit`: the layout rule counts a function's lines).
-_CONTINUE_BIFURCATION_DOC = """Follow a fold, period-doubling or Neimark-Sacker point of
-periodic orbits, or a fold or Hopf point of equilibria, in a second parameter.
+_CONTINUE_BIFURCATION_DOC = """Follow a fold, period-doubling, Neimark-Sacker or symmetry-breaking
+point of periodic orbits, or a fold or Hopf point of equilibria, in a second parameter.
 
 A minimally augmented system whose borders are taken again where the null vectors
 have turned by 60 degrees (docs/orbits.md, "Borders along long curves").
@@ -116,9 +118,11 @@ branch : Branch
     An orbit branch from :func:`~stickslip_fast.continue_orbit`, or an equilibrium
     branch from :func:`~stickslip_fast.continue_equilibrium` (``period == 0``).
 bifurcation : Bifurcation
-    One of ``branch.bifurcations``, of kind "fold", "period-doubling" or
+    One of ``branch.bifurcations``, of kind "fold", "period-doubling",
     "neimark-sacker" (orbits; :mod:`~stickslip_fast.bifurcation.nscurve`: the angle
-    theta of the multipliers e^{+-i theta} is an unknown, ``Curve.theta``), "fold"
+    theta of the multipliers e^{+-i theta} is an unknown, ``Curve.theta``),
+    "symmetry-breaking" (in-phase orbits of disks on one DC motor:
+    :mod:`~stickslip_fast.bifurcation.sbcurve`) or "stick-phase" (orbits); "fold"
     or "hopf" (equilibria).
 param2 : str
     A :class:`System` field other than ``branch.param``.
@@ -231,6 +235,10 @@ def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps
             extra["theta"] = xs[:, n - 1].copy()
             xs = np.delete(xs, n - 1, axis=1)
             codim2 = [(k, i, np.delete(x, n - 1)) for k, i, x in codim2]
+    elif kind == SB_KIND:
+        xs, mults, codim2, status = follow_sb_curve(base, system_at, full, x0, direction,
+                                                    bounds2, h=h, watch=watch,
+                                                    periods=periods, **settings)  # fmt: skip
     elif kind == STICK_KIND:
         xs, mults, codim2, status, extra = _stick(branch, bifurcation, param2, system0, x0,
                                                   base, full, direction, bounds2,
@@ -304,7 +312,7 @@ def _check(branch, bifurcation, param2, bounds2):
     if not isinstance(branch, Branch) or branch.period < 0:
         raise ValueError("branch must be a Branch from continue_orbit or continue_equilibrium")
     kinds = (
-        sorted([*CURVE_KINDS, NS_KIND, STICK_KIND])
+        sorted([*CURVE_KINDS, NS_KIND, STICK_KIND, SB_KIND])
         if branch.period
         else list(EQUILIBRIUM_CURVE_KINDS)
     )
@@ -323,4 +331,6 @@ def _check(branch, bifurcation, param2, bounds2):
     v2 = float(getattr(system0, param2))
     if not (math.isfinite(lo) and math.isfinite(hi) and lo <= v2 <= hi):
         raise ValueError(f"bounds2 {plain(bounds2)} must contain {param2} = {v2}")
+    if bifurcation.kind == SB_KIND and not synchronous_point(system0, bifurcation.point):
+        raise ValueError("bifurcation: a symmetry-breaking point must lie on in-phase orbits")
     return bifurcation.kind, system0, lo, hi

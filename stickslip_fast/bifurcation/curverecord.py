@@ -34,8 +34,8 @@ class Curve:
     param, param2 : str
         The branch's parameter and the second one.
     kind : str
-        The codim-1 kind followed: "fold", "period-doubling", "neimark-sacker" or
-        "stick-phase" (orbits), "fold" or "hopf" (equilibria).
+        The codim-1 kind followed: "fold", "period-doubling", "neimark-sacker",
+        "symmetry-breaking" or "stick-phase" (orbits), "fold" or "hopf" (equilibria).
     period : int
         Section crossings per period of the orbits; 0 for equilibria.
     values : ndarray, shape (k, 2)
@@ -63,7 +63,9 @@ class Curve:
         "bogdanov-takens" (a second zero eigenvalue on a fold curve; omega -> 0 on a
         Hopf curve), "zero-hopf" (a pair +-i omega on a fold curve; a zero eigenvalue
         on a Hopf curve), "bautin" (the Hopf curve's first Lyapunov coefficient
-        changes sign). Orbit fold, period-doubling and NS curves, with ``stick_events``:
+        changes sign). Symmetry-breaking curves: "1:1" and "fold-flip" (a multiplier of
+        the whole map other than the transverse +1 at +1 or -1: e.g. the curve meets a
+        fold of the in-phase orbits). Orbit curves, with ``stick_events``:
         "stick-phase" (the orbit's count of stick phases changes); at a curve's end,
         "section-grazing" (the orbit grazes the section there, so the curve stops).
     status : str

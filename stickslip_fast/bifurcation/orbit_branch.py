@@ -454,7 +454,7 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
     evaluate(x0)
     last = {}
     # an in-phase branch also marks where a transverse multiplier passes +1
-    evaluate, refine, marks = in_phase_walk(orbit, system_at, full, evaluate, refine)
+    evaluate, refine, marks = in_phase_walk(orbit, system_at, full, evaluate, refine, periods)
 
     def keep_tangent(x, data, walk):  # the tangent at each accepted point, oriented onwards
         last["t"] = walk.t.copy()

@@ -471,7 +471,7 @@ def _parse_issue28_keys(table: dict[str, Any], out: dict[str, Any]) -> None:
 
 
 #: The kinds of an orbit branch's points [continue].kinds2 may name (default: the first three).
-CURVE_KINDS2 = ("fold", "period-doubling", "neimark-sacker", "stick-phase")
+CURVE_KINDS2 = ("fold", "period-doubling", "neimark-sacker", "stick-phase", "symmetry-breaking")
 
 
 def load_config(path: str | Path) -> RunConfig:
