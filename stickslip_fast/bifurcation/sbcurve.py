@@ -25,7 +25,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..model.system import System
 from .detection import _sorted_eigs
 from .foldcurve import (
     _bordered,
@@ -36,7 +35,7 @@ from .foldcurve import (
     run_curve,
 )
 from .returnmap import SECTION_INDEX, _field
-from .synchrony import in_phase_projector, project_in_phase, transverse_block
+from .synchrony import in_phase_projector, project_in_phase
 
 #: The kind of the curves :func:`follow_sb_curve` follows.
 SB_KIND = "symmetry-breaking"
@@ -56,6 +55,11 @@ def _pair(n: int) -> np.ndarray:
 def _directions(pair: np.ndarray, f: np.ndarray) -> np.ndarray:
     """U: the columns P e_j moved onto the section along f (their dx1 made 0)."""
     return pair - np.outer(f, pair[SECTION_INDEX] / f[SECTION_INDEX])
+
+
+def _transverse_matrix(A, pair, U, mask) -> np.ndarray:
+    """M_t = Phi_d - I = (1/2) P^T D P U - I (D P's images have dx1 = 0: P^T over the rest)."""
+    return 0.5 * pair[mask].T @ (A @ U[mask]) - np.eye(4)
 
 
 def _field_at(system_at, full, x: np.ndarray) -> np.ndarray | None:
@@ -94,21 +98,17 @@ def sb_augmented(base: tuple[Callable, Callable], system_at: Callable, full: Cal
     :func:`.foldcurve.refresh_borders`.
     """
     state = dict(b=b, c=c, scale=scale, v=None, w=None, rows=1)
-    mask = None
-
     in_phase, plain = base
 
     def evaluate(x):
-        nonlocal mask
         ok, G, DG, A = in_phase(x)
         f = _field_at(system_at, full, x) if ok else None
         if f is None:
             return False, None, None, None
-        n = f.size
-        mask = np.arange(n) != SECTION_INDEX
-        pair = _pair(n)
+        mask = np.arange(f.size) != SECTION_INDEX
+        pair = _pair(f.size)
         U = _directions(pair, f)
-        M_t = 0.5 * pair[mask].T @ (A @ U[mask]) - np.eye(4)  # P^T on dx1 = 0 images
+        M_t = _transverse_matrix(A, pair, U, mask)
         try:
             v, w, g = _bordered(M_t, state["b"], state["c"])
         except np.linalg.LinAlgError:
@@ -166,8 +166,7 @@ def follow_sb_curve(
         return None, None, [], "start-failed"
     mask = np.arange(f.size) != SECTION_INDEX
     pair = _pair(f.size)
-    M_t = 0.5 * pair[mask].T @ (A @ _directions(pair, f)[mask]) - np.eye(4)
-    b, c = border(M_t)
+    b, c = border(_transverse_matrix(A, pair, _directions(pair, f), mask))
     bases = (project_in_phase(base, in_phase_projector(system_at(x0)), 2, periods), base)
     ok, _, DF, _ = sb_augmented(bases, system_at, full, n_z, b, c, h)(x0)
     if not ok:
@@ -180,9 +179,3 @@ def follow_sb_curve(
         spectrum=lambda A: _sorted_eigs(A[0]), watch=watch, **settings,
     )  # fmt: skip
     return xs, mults, codim2, status
-
-
-def transverse_multiplier_one(system: System, z: np.ndarray, jac: np.ndarray) -> float:
-    """The transverse multiplier nearest +1 at an in-phase point (for checks)."""
-    mu = np.linalg.eigvals(transverse_block(system, z, jac)[0])
-    return complex(mu[np.argmin(np.abs(mu - 1.0))]).real
