@@ -264,3 +264,18 @@ def test_the_curve_of_symmetry_breaking_points_in_the_motor_load(in_phase_branch
     back = ssf.Curve.from_hdf5(curve.to_hdf5(tmp_path / "sb.h5"))
     assert back.kind == "symmetry-breaking"
     np.testing.assert_array_equal(back.values, curve.values)
+
+
+def test_in_phase_and_anti_phase_motion_coexist_at_eta_3():
+    # the paper sees anti-phase motion at eta = 3 (Fig. 14's start); the in-phase orbit is
+    # stable there too (transverse multiplier 0.617), with a thin basin
+    system = _sym(2, 3.0)
+    g = np.linspace(-0.1, 0.1, 9)  # disk 2's (x, dx); disk 1 and the motor at rest
+    r = ssf.basins(system, (g, g), plane=("x2", "dx2"), t_end=20000, progress=False)
+    in_phase = [a for a in r.attractors if synchronous_point(system, a.points[0])]
+    apart = [a for a in r.attractors if not synchronous_point(system, a.points[0])]
+    assert len(in_phase) == 1 and len(apart) == 1
+    assert apart[0].kind == "orbit" and abs(apart[0].points[0][4] - apart[0].points[0][0]) > 0.1
+    assert r.labels[4, 5] == in_phase[0].id  # disk 2 started 0.025 faster: back in phase
+    assert r.labels[6, 6] == apart[0].id  # the paper's start (0.05, 0.05)
+    assert 0.02 < in_phase[0].fraction < 0.15  # measured 0.049 (0.070 on 25 x 25 cells)
