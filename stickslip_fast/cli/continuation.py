@@ -137,6 +137,7 @@ def _orbit_from_config(cfg: RunConfig, param: str, period, say):
     """The orbit of the config's system: a simulation from [initial], then Newton."""
     from ..analysis.simulate import simulate
     from ..bifurcation.orbits import find_orbit
+    from ..bifurcation.synchrony import sync_stability, synchronous_point
 
     value = getattr(cfg.system, param)
     say(f"settling at {param} = {value:g} (t_end {cfg.integration['t_end']:g}) ...")
@@ -156,7 +157,20 @@ def _orbit_from_config(cfg: RunConfig, param: str, period, say):
     lead = np.abs(orbit.multipliers).max() if orbit.multipliers.size else float("nan")
     say(f"orbit: period {orbit.period}, T = {orbit.T:.10g}, residual {orbit.residual:.2g}, "
         f"|leading multiplier| {lead:.4g}")  # fmt: skip
+    if cfg.system.n_oscillators >= 2 and all(
+        synchronous_point(cfg.system, z) for z in orbit.points
+    ):
+        sync = sync_stability(orbit)
+        across, along = (_number(m[0]) for m in (sync.transverse, sync.longitudinal))
+        say(f"in phase: leading multiplier across the disks {across} "
+            f"({'stable' if sync.transverse_stable else 'not stable'} across them), "
+            f"along them {along}")  # fmt: skip
     return orbit
+
+
+def _number(m: complex) -> str:
+    """A multiplier for the terminal: its real part when it is real."""
+    return f"{m.real:.4g}" if m.imag == 0 else f"{m:.4g}"
 
 
 def _equilibrium_from_config(cfg: RunConfig, param: str, start: str, say):
