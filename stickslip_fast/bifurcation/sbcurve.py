@@ -35,26 +35,13 @@ from .foldcurve import (
     run_curve,
 )
 from .returnmap import SECTION_INDEX, _field
-from .synchrony import in_phase_projector, project_in_phase
+from .synchrony import in_phase_projector, pair_matrix, project_in_phase, section_directions
 
 #: The kind of the curves :func:`follow_sb_curve` follows.
 SB_KIND = "symmetry-breaking"
 
 #: Relative step of the central differences of the field in z and the parameters.
 FIELD_STEP = 1e-7
-
-
-def _pair(n: int) -> np.ndarray:
-    """P: e_j on disk 1 and -e_j on disk 2, as columns (n_state x 4)."""
-    pair = np.zeros((n, 4))
-    pair[0:4] = np.eye(4)
-    pair[4:8] = -np.eye(4)
-    return pair
-
-
-def _directions(pair: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """U: the columns P e_j moved onto the section along f (their dx1 made 0)."""
-    return pair - np.outer(f, pair[SECTION_INDEX] / f[SECTION_INDEX])
 
 
 def _transverse_matrix(A, pair, U, mask) -> np.ndarray:
@@ -106,8 +93,8 @@ def sb_augmented(base: tuple[Callable, Callable], system_at: Callable, full: Cal
         if f is None:
             return False, None, None, None
         mask = np.arange(f.size) != SECTION_INDEX
-        pair = _pair(f.size)
-        U = _directions(pair, f)
+        pair = pair_matrix(f.size)
+        U = section_directions(pair, f)
         M_t = _transverse_matrix(A, pair, U, mask)
         try:
             v, w, g = _bordered(M_t, state["b"], state["c"])
@@ -165,8 +152,8 @@ def follow_sb_curve(
     if f is None:
         return None, None, [], "start-failed"
     mask = np.arange(f.size) != SECTION_INDEX
-    pair = _pair(f.size)
-    b, c = border(_transverse_matrix(A, pair, _directions(pair, f), mask))
+    pair = pair_matrix(f.size)
+    b, c = border(_transverse_matrix(A, pair, section_directions(pair, f), mask))
     bases = (project_in_phase(base, in_phase_projector(system_at(x0)), 2, periods), base)
     ok, _, DF, _ = sb_augmented(bases, system_at, full, n_z, b, c, h)(x0)
     if not ok:

@@ -20,7 +20,13 @@ from .orbits import (
     return_map,
 )
 from .returnmap import _field
-from .synchrony import SYMMETRY_BREAKING, synchronous_point, transverse_block
+from .synchrony import (
+    SYMMETRY_BREAKING,
+    pair_matrix,
+    section_directions,
+    synchronous_point,
+    transverse_block,
+)
 
 # ------------------------------------------------------------ branch switching
 #: Offsets along the -1 eigenvector tried by :func:`switch_branch`, largest first: the
@@ -263,10 +269,9 @@ def _switch_apart(branch: Branch, bif: Bifurcation, deltas, fd_step: float, poli
         raise ValueError(f"the return map fails at the bifurcation point: {st}")
     mu, vecs = np.linalg.eig(transverse_block(s_sb, z, jac)[0])
     a = np.real(vecs[:, int(np.argmin(np.abs(mu - 1.0)))])
-    pair = np.zeros(system.n_state)
-    pair[0:4], pair[4:8] = a, -a
-    f = _field(s_sb, z)
-    v = pair - pair[SECTION_INDEX] / f[SECTION_INDEX] * f
+    P = pair_matrix(system.n_state)
+    pair = P @ a  # a on disk 1, -a on disk 2
+    v = section_directions(P, _field(s_sb, z)) @ a
     size = float(np.linalg.norm(pair[mask]))
     normal = np.r_[pair[mask] / size, 0.0]
     evaluate, full, system_at, _ = _orbit_evaluator(system, branch.param, p, rtol, atol, fd_step)

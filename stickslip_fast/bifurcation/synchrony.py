@@ -58,6 +58,8 @@ __all__ = [
     "in_phase_walk",
     "in_phase_projector",
     "project_in_phase",
+    "pair_matrix",
+    "section_directions",
 ]
 
 #: Largest difference between the disks, relative to max(1, abs(state)), for a point
@@ -148,6 +150,21 @@ def _outside(w: np.ndarray, basis: np.ndarray, scale: float) -> float:
     return float(np.max(np.abs(w - basis @ coef))) / scale
 
 
+def pair_matrix(n: int) -> np.ndarray:
+    """P: the columns e_j on disk 1 and -e_j on disk 2 (n_state x 4), a basis of one copy
+    of the transverse perturbations."""
+    pair = np.zeros((n, 4))
+    pair[0:4] = np.eye(4)
+    pair[4:8] = -np.eye(4)
+    return pair
+
+
+def section_directions(pair: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """U: the columns of ``pair`` moved onto the section along the field f (their dx1 made
+    0), u = P a - (P a)_dx1 / f_dx1 f; D P maps U a to P Phi_d a plus a multiple of f."""
+    return pair - np.outer(f, pair[SECTION_INDEX] / f[SECTION_INDEX])
+
+
 def transverse_block(system: System, z: np.ndarray, jac: np.ndarray) -> tuple[np.ndarray, float]:
     """The 4 x 4 transverse monodromy of an in-phase orbit from its return map's Jacobian.
 
@@ -168,15 +185,13 @@ def transverse_block(system: System, z: np.ndarray, jac: np.ndarray) -> tuple[np
         The largest part of an image D P v outside span(P, f), relative to
         max(abs(jac)) max(abs(v)).
     """
-    n = system.n_state
     f = _field(system, z)
-    pair = np.zeros((n, 4))  # a on disk 1, -a on disk 2
-    pair[0:4] = np.eye(4)
-    pair[4:8] = -np.eye(4)
+    pair = pair_matrix(system.n_state)
+    U = section_directions(pair, f)
     block = np.empty((4, 4))
     residual = 0.0
     for j in range(4):
-        v = pair[:, j] - pair[SECTION_INDEX, j] / f[SECTION_INDEX] * f
+        v = U[:, j]
         w = _embed(system, jac, v)
         block[:, j] = 0.5 * (pair.T @ w)
         scale = max(float(np.max(np.abs(jac))) * float(np.max(np.abs(v))), 1e-300)
