@@ -66,6 +66,12 @@ __all__ = [
 #: to count as in phase (a Newton fixed point from an in-phase start differs by ~tol).
 SYNC_TOL = 1e-6
 
+#: The stricter test :func:`in_phase_walk` applies to a branch's start before it keeps the
+#: walk in phase: orbits found from in-phase runs agree to ~1e-8 even next to an SB point
+#: (measured 1.5e-8), the orbits with the disks apart that :func:`switch_branch` returns
+#: differ by 1.7e-6 or more, and those must not be projected back onto the in-phase ones.
+WALK_SYNC_TOL = 1e-7
+
 
 @dataclass
 class SyncStability:
@@ -354,7 +360,8 @@ def in_phase_walk(orbit: Orbit, system_at, full, evaluate, refine, periods=None)
     Parameters
     ----------
     orbit : Orbit
-        The branch's start; nothing changes unless it is in phase on a DC motor.
+        The branch's start; nothing changes unless it is in phase (to
+        :data:`WALK_SYNC_TOL`) on a DC motor.
     system_at : callable
         lambda -> System on the branch.
     full : callable
@@ -381,7 +388,8 @@ def in_phase_walk(orbit: Orbit, system_at, full, evaluate, refine, periods=None)
         ``spectrum`` for :func:`.arclength.pseudo_arclength`; empty otherwise.
     """
     system = orbit.system
-    if not (system.is_dc_motor and all(synchronous_point(system, z) for z in orbit.points)):
+    if not (system.is_dc_motor
+            and all(synchronous_point(system, z, WALK_SYNC_TOL) for z in orbit.points)):  # fmt: skip
         return evaluate, refine, {}
 
     S = in_phase_projector(system)
