@@ -35,18 +35,19 @@ from .foldcurve import (
     run_curve,
 )
 from .returnmap import SECTION_INDEX, _field
-from .synchrony import in_phase_projector, pair_matrix, project_in_phase, section_directions
+from .synchrony import (
+    in_phase_projector,
+    monodromy_across,
+    pair_matrix,
+    project_in_phase,
+    section_directions,
+)
 
 #: The kind of the curves :func:`follow_sb_curve` follows.
 SB_KIND = "symmetry-breaking"
 
 #: Relative step of the central differences of the field in z and the parameters.
 FIELD_STEP = 1e-7
-
-
-def _transverse_matrix(A, pair, U, mask) -> np.ndarray:
-    """M_t = Phi_d - I = (1/2) P^T D P U - I (D P's images have dx1 = 0: P^T over the rest)."""
-    return 0.5 * pair[mask].T @ (A @ U[mask]) - np.eye(4)
 
 
 def _field_at(system_at, full, x: np.ndarray) -> np.ndarray | None:
@@ -95,7 +96,7 @@ def sb_augmented(base: tuple[Callable, Callable], system_at: Callable, full: Cal
         mask = np.arange(f.size) != SECTION_INDEX
         pair = pair_matrix(f.size)
         U = section_directions(pair, f)
-        M_t = _transverse_matrix(A, pair, U, mask)
+        M_t = monodromy_across(A, pair, U) - np.eye(4)
         try:
             v, w, g = _bordered(M_t, state["b"], state["c"])
         except np.linalg.LinAlgError:
@@ -151,9 +152,8 @@ def follow_sb_curve(
     f = _field_at(system_at, full, x0) if ok else None
     if f is None:
         return None, None, [], "start-failed"
-    mask = np.arange(f.size) != SECTION_INDEX
     pair = pair_matrix(f.size)
-    b, c = border(_transverse_matrix(A, pair, section_directions(pair, f), mask))
+    b, c = border(monodromy_across(A, pair, section_directions(pair, f)) - np.eye(4))
     bases = (project_in_phase(base, in_phase_projector(system_at(x0)), 2, periods), base)
     ok, _, DF, _ = sb_augmented(bases, system_at, full, n_z, b, c, h)(x0)
     if not ok:

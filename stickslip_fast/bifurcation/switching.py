@@ -25,7 +25,7 @@ from .synchrony import (
     pair_matrix,
     section_directions,
     synchronous_point,
-    transverse_block,
+    transverse_monodromy,
 )
 
 # ------------------------------------------------------------ branch switching
@@ -267,7 +267,7 @@ def _switch_apart(branch: Branch, bif: Bifurcation, deltas, fd_step: float, poli
     st, _, _, jac = return_map(s_sb, z, p, rtol=rtol, atol=atol)
     if st != "ok":
         raise ValueError(f"the return map fails at the bifurcation point: {st}")
-    mu, vecs = np.linalg.eig(transverse_block(s_sb, z, jac)[0])
+    mu, vecs = np.linalg.eig(transverse_monodromy(s_sb, z, jac))
     a = np.real(vecs[:, int(np.argmin(np.abs(mu - 1.0)))])
     P = pair_matrix(system.n_state)
     pair = P @ a  # a on disk 1, -a on disk 2

@@ -55,6 +55,8 @@ __all__ = [
     "sync_stability",
     "synchronous_point",
     "transverse_block",
+    "transverse_monodromy",
+    "monodromy_across",
     "in_phase_walk",
     "in_phase_projector",
     "project_in_phase",
@@ -171,6 +173,19 @@ def section_directions(pair: np.ndarray, f: np.ndarray) -> np.ndarray:
     return pair - np.outer(f, pair[SECTION_INDEX] / f[SECTION_INDEX])
 
 
+def monodromy_across(jac: np.ndarray, pair: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """Phi_d = (1/2) P^T D P U from the return map's Jacobian in section coordinates (D P's
+    images have dx1 = 0, so P^T runs over the other rows)."""
+    mask = np.arange(pair.shape[0]) != SECTION_INDEX
+    return 0.5 * pair[mask].T @ (jac @ U[mask])
+
+
+def transverse_monodromy(system: System, z: np.ndarray, jac: np.ndarray) -> np.ndarray:
+    """Phi_d at the in-phase point ``z`` (:func:`transverse_block` without its check)."""
+    pair = pair_matrix(system.n_state)
+    return monodromy_across(jac, pair, section_directions(pair, _field(system, z)))
+
+
 def transverse_block(system: System, z: np.ndarray, jac: np.ndarray) -> tuple[np.ndarray, float]:
     """The 4 x 4 transverse monodromy of an in-phase orbit from its return map's Jacobian.
 
@@ -194,12 +209,11 @@ def transverse_block(system: System, z: np.ndarray, jac: np.ndarray) -> tuple[np
     f = _field(system, z)
     pair = pair_matrix(system.n_state)
     U = section_directions(pair, f)
-    block = np.empty((4, 4))
+    block = monodromy_across(jac, pair, U)
     residual = 0.0
     for j in range(4):
         v = U[:, j]
         w = _embed(system, jac, v)
-        block[:, j] = 0.5 * (pair.T @ w)
         scale = max(float(np.max(np.abs(jac))) * float(np.max(np.abs(v))), 1e-300)
         residual = max(residual, _outside(w, np.column_stack([pair, f]), scale))
     return block, residual
@@ -405,7 +419,7 @@ def in_phase_walk(orbit: Orbit, system_at, full, evaluate, refine, periods=None)
 
     def tests(A, t: np.ndarray) -> dict[str, float]:
         jac, x = A
-        block, _ = transverse_block(system_at(float(x[-1])), full(x), jac)
+        block = transverse_monodromy(system_at(float(x[-1])), full(x), jac)
         return {**_tests(jac, t), SYMMETRY_BREAKING: float(np.linalg.det(block - np.eye(4)))}
 
     def spectrum(A) -> np.ndarray:
