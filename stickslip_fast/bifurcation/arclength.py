@@ -12,97 +12,13 @@ from typing import Any
 
 import numpy as np
 
-from .detection import _sorted_eigs, _tests
+from .corrector import NOISE_FLOOR, Evaluator, _correct, _locate, _tangent
+from .detection import BRANCH_POINT, _sorted_eigs, _tests, branch_point_test, point_spread
 from .progress import walk_reporter
 
 #: A branch ends with status "precision-limit" where its last this many steps together
 #: advance less than the ``ds_min`` given (possible only in the tighter stages).
 STALL_WINDOW = 10
-
-
-# evaluate(x) -> (ok, G (m,), DG (m, m + 1), A (m, m)): residual, its Jacobian in (z, lambda),
-# and the map's Jacobian in z (whose eigenvalues are the multipliers)
-Evaluator = Callable[[np.ndarray], tuple[bool, np.ndarray, np.ndarray, np.ndarray]]
-
-
-# ------------------------------------------------------------------ the core
-def _tangent(DG: np.ndarray, prev: np.ndarray) -> np.ndarray:
-    """Unit null vector of DG (m x (m+1)), oriented along ``prev``."""
-    m = DG.shape[0]
-    A = np.vstack([DG, prev[None, :]])
-    rhs = np.zeros(m + 1)
-    rhs[-1] = 1.0
-    t = np.linalg.solve(A, rhs)
-    return t / np.linalg.norm(t)
-
-
-#: What :func:`_correct` returns in place of (G, DG, A) when it stopped at the residual's
-#: round-off floor: converged as far as the arithmetic allows, but not to ``tol``.
-NOISE_FLOOR = "noise-floor"
-
-
-def _round_off_floor(DG: np.ndarray, x: np.ndarray) -> float:
-    """eps ||DG|| ||x|| (max norms): the residual that rounding errors of x's size can cause.
-
-    The evaluation noise of a strongly unstable orbit's return map scales with its
-    Jacobian: past the upper fold of Fig. 6's period-1 branch (multiplier 1e2 to 4e3), G
-    at x and at x moved by ~1e-14 relative differ from the linear prediction by up to
-    0.09-0.35 times this (rtol 1e-11 and 1e-13; docs/orbits.md, "Cost").
-    """
-    return float(np.finfo(float).eps * np.max(np.abs(DG).sum(axis=1)) * np.max(np.abs(x)))
-
-
-def _correct(evaluate: Evaluator, x_pred, normal, anchor, tol, max_iter):
-    """Newton on [G(x); normal . (x - anchor)] = 0 from x_pred.
-
-    Converged when max |G| <= tol and |normal . (x - anchor)| <= tol. Fails early
-    (docs/orbits.md, "Cost") where more iterations would only resample the
-    evaluation's noise:
-
-    - at the round-off floor: the Newton update is below ``tol`` and max |G|,
-      above ``tol``, is below :func:`_round_off_floor` and did not halve in this
-      iteration (returned with :data:`NOISE_FLOOR` in place of the data);
-    - stalled: in Newton's local regime (update below sqrt(tol)), two iterations
-      in a row did not halve the smallest residual so far.
-
-    Neither accepts a point the plain test would reject.
-
-    Returns
-    -------
-    (converged, x, (G, DG, A) or None or NOISE_FLOOR, iterations)
-    """
-    x = x_pred.copy()
-    best, stalled = math.inf, 0
-    for it in range(max_iter + 1):
-        ok, G, DG, A = evaluate(x)
-        if not ok:
-            return False, x, None, it
-        res = float(np.max(np.abs(G)))
-        h = float(normal @ (x - anchor))
-        if res <= tol and abs(h) <= tol:
-            return True, x, (G, DG, A), it
-        # Newton near a root gains digits quadratically: a residual that does not halve
-        # is noise (the integration's or the rounding's), not progress
-        if res < 0.5 * best:
-            best, stalled = res, 0
-        else:
-            stalled += 1
-        J = np.vstack([DG, normal[None, :]])
-        try:
-            dx = np.linalg.solve(J, -np.r_[G, h])
-        except np.linalg.LinAlgError:
-            return False, x, None, it
-        step = float(np.max(np.abs(dx)))
-        if stalled and step <= tol and abs(h) <= tol and res <= _round_off_floor(DG, x):
-            return False, x, NOISE_FLOOR, it
-        if stalled >= 2 and step <= math.sqrt(tol):
-            return False, x, None, it
-        if it == max_iter:
-            break
-        x = x + dx
-        if not np.all(np.isfinite(x)):
-            return False, x, None, it
-    return False, x, None, max_iter
 
 
 #: :func:`pseudo_arclength`'s docstring (kept out of the function body, like
@@ -153,6 +69,14 @@ orient : ndarray, optional
 stall_ds_min : float, optional
     The ``ds_min`` of the stall test (default ``ds_min``; a resumed branch
     passes the one given first).
+branch_points : bool
+    Also mark branch points (kind "branch-point": the sign of det [DG; tᵀ],
+    :func:`.detection.branch_point_test`; a fold located in the same step as a
+    branch point is the branch point: a pitchfork's side branch turns there) and
+    end the branch with status "singular" at a point whose position the
+    corrector's ``tol`` no longer fixes to within half its step
+    (:func:`.detection.point_spread`): DG is singular there to the evaluation's
+    precision, and the tangent and the tests with it are noise.
 stop : callable, optional
     (x, A, walk) -> True ends the branch after accepting x (its map's Jacobian
     A) with status "stopped" (for a change of coordinates; ``walk`` holds the
@@ -174,7 +98,8 @@ xs, mults, bifs, status
     The points (k, m + 1), their multipliers (k, m), the located
     bifurcations (kind, lambda, index, x) and the reason the branch ended:
     "bounds", "max-points", "step-too-small" (the corrector failed),
-    "nonsmooth" (steps kept jumping off the branch), "stopped" (``stop``) or "precision-limit"
+    "nonsmooth" (steps kept jumping off the branch), "stopped" (``stop``),
+    "singular" (``branch_points``) or "precision-limit"
     (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
     less than ``ds_min``; or the last corrector stopped at the residual's
     round-off floor, :func:`_correct`, with no stage left).
@@ -201,9 +126,10 @@ def pseudo_arclength(
     orient: np.ndarray | None = None,
     stall_ds_min: float | None = None,
     stop: Callable[[np.ndarray, Any, Any], bool] | None = None,
+    branch_points: bool = False,
 ):
     walk = _Walk.start(evaluate, x0, direction, tol, ds, ds_min, refine, tests,
-                       spectrum or _sorted_eigs, orient)  # fmt: skip
+                       spectrum or _sorted_eigs, orient, branch_points)  # fmt: skip
     stall_ds = ds_min if stall_ds_min is None else stall_ds_min
     lo, hi = bounds
     status = "max-points"
@@ -219,6 +145,9 @@ def pseudo_arclength(
                 status = "nonsmooth" if trial.jumped else "step-too-small"
                 if trial.floored:  # the residual's noise, not the step, stopped the corrector
                     status = "precision-limit"
+                break
+            if branch_points and walk.unresolved(x, trial.x_new, trial.data[1]):
+                status = "singular"
                 break
             walk.accept(x, trial.x_new, trial.data, locate_tol)
             if report is not None:
@@ -316,14 +245,14 @@ def _stalled(xs: list[np.ndarray], ds_min_given: float) -> bool:
 class _Walk:
     """A branch being followed: its points, multipliers, test values and bifurcations so
     far, the tangent at the last point, and the settings in force (a ``refine`` stage
-    replaces ``evaluate``, ``tol`` and ``ds_min``)."""
+    replaces ``evaluate``, ``tol`` and ``ds_min``). ``test_fn(A, DG, t)``: the test values."""
 
     evaluate: Evaluator
     tol: float
     ds: float
     ds_min: float
     stages: list[tuple[Evaluator, float, float]]
-    test_fn: Callable[[np.ndarray, np.ndarray], dict[str, float]]
+    test_fn: Callable[[Any, np.ndarray, np.ndarray], dict[str, float]]
     spectrum: Callable[[np.ndarray], np.ndarray]
     t: np.ndarray
     xs: list[np.ndarray] = field(default_factory=list)
@@ -332,8 +261,8 @@ class _Walk:
     bifs: list[tuple[str, float, int, np.ndarray]] = field(default_factory=list)
 
     @classmethod
-    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, test_fn, spectrum,
-              orient=None) -> _Walk:  # fmt: skip
+    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, tests, spectrum,
+              orient=None, branch_points=False) -> _Walk:  # fmt: skip
         """The walk at x0, its tangent oriented by ``direction`` in lambda (or by ``orient``)."""
         ok, G, DG, A = evaluate(x0)
         if not ok:
@@ -343,21 +272,45 @@ class _Walk:
         if orient is not None:
             guess = np.asarray(orient, dtype=float)
         t = _tangent(DG, guess)
+
+        def test_fn(A, DG, t):
+            out = tests(A, t)
+            if branch_points:
+                out[BRANCH_POINT] = branch_point_test(DG, t)
+            return out
+
         walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()])
         walk.mults.append(spectrum(A))
-        walk.tests.append(test_fn(A, t))
+        walk.tests.append(test_fn(A, DG, t))
         return walk
+
+    def unresolved(self, x: np.ndarray, x_new: np.ndarray, DG: np.ndarray) -> bool:
+        """x_new's position along the branch is not fixed by the corrector's tolerance to
+        within half the step from x (:func:`.detection.point_spread`), or it lies on a
+        point where DG is singular (no tangent)."""
+        try:
+            spread = point_spread(DG, _tangent(DG, self.t), self.tol)
+        except np.linalg.LinAlgError:
+            return True
+        return spread > 0.5 * float(np.linalg.norm(x_new - x))
 
     def accept(self, x: np.ndarray, x_new: np.ndarray, data, locate_tol: float) -> None:
         """Append x_new (corrected, with ``data`` = (G, DG, A)), locating the bifurcations
         whose test functions change sign between x and x_new."""
         G, DG, A = data
         t_new = _tangent(DG, self.t)
-        te = self.test_fn(A, t_new)
+        te = self.test_fn(A, DG, t_new)
         k = len(self.xs) - 1
+        changed = {
+            kind
+            for kind, prev in self.tests[-1].items()
+            if math.isfinite(prev) and math.isfinite(te[kind]) and prev * te[kind] < 0
+        }
+        if BRANCH_POINT in changed:  # a pitchfork's side branch turns at the branch point
+            changed.discard("fold")
         for kind, prev in self.tests[-1].items():
             cur = te[kind]
-            if math.isfinite(prev) and math.isfinite(cur) and prev * cur < 0:
+            if kind in changed:
                 loc = _locate(self.evaluate, x, x_new, kind, prev, cur, self.t, self.tol,
                               locate_tol, self.test_fn)  # fmt: skip
                 if loc is not None:
@@ -383,7 +336,7 @@ class _Walk:
         del self.xs[j + 1 :], self.mults[j + 1 :], self.tests[j + 1 :]
         self.xs[j] = x_re
         self.mults[j] = self.spectrum(A)
-        self.tests[j] = self.test_fn(A, self.t)
+        self.tests[j] = self.test_fn(A, DG, self.t)
         self.bifs = [b for b in self.bifs if b[2] < j]
         return True
 
@@ -410,66 +363,3 @@ def _restart(
             if okc and np.linalg.norm(x - xs[j]) <= reach:
                 return j, x, data
     return None
-
-
-def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol, test_fn=_tests):
-    """Illinois secant in sigma in [0, 1] on the chord xa -> xb, correcting each point."""
-    chord = xb - xa
-    normal = chord / np.linalg.norm(chord)
-    a, b = 0.0, 1.0
-    side = 0
-    x_best = None
-    lam_prev = math.inf
-    for _ in range(60):
-        sig = (a * fb - b * fa) / (fb - fa)
-        if not a < sig < b:
-            sig = 0.5 * (a + b)
-        anchor = xa + sig * chord
-        okc, x, data, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
-        if not okc:
-            return x_best
-        _, DG, A = data
-        f = test_fn(A, _tangent(DG, t_a))[kind]
-        x_best = x
-        if abs(x[-1] - lam_prev) <= locate_tol or f == 0.0 or b - a < 1e-14:
-            return x
-        lam_prev = x[-1]
-        if f * fa > 0:
-            a, fa = sig, f
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b, fb = sig, f
-            if side == 1:
-                fa *= 0.5
-            side = 1
-    return x_best
-
-
-def _locate_change(evaluate, xa, xb, count_a, count_at, tol, locate_tol):
-    """Bisection on the chord xa -> xb (each trial corrected onto the branch) for where
-    the integer ``count_at(x)`` stops being ``count_a``; returns the first point past it
-    (xb if no trial converges), within ``locate_tol`` in the parameter."""
-    chord = xb - xa
-    normal = chord / np.linalg.norm(chord)
-    a, b = 0.0, 1.0
-    x_past = xb
-    for _ in range(60):
-        if abs(chord[-1]) * (b - a) <= locate_tol:
-            break
-        sig = 0.5 * (a + b)
-        anchor = xa + sig * chord
-        okc, x, _, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
-        if not okc:
-            break
-        try:
-            same = count_at(x) == count_a
-        except ValueError:  # the orbit could not be sampled there
-            break
-        if same:
-            a = sig
-        else:
-            b = sig
-            x_past = x
-    return x_past

@@ -27,9 +27,13 @@ class Bifurcation:
     dx1 = 0 appears or vanishes; the branch of P^p ends) or "stick-phase" (the number of
     stick phases per period changes: one appears or vanishes, see
     :func:`~stickslip_fast.bifurcation.stickphases.stick_phases`; the point is the first one past the
-    change) on orbit branches; "fold" or
+    change) or "symmetry-breaking" (in-phase orbits of disks on one motor: a multiplier
+    across the disks passes +1) on orbit branches; "fold" or
     "hopf" (a complex pair of the Jacobian's eigenvalues crosses the imaginary axis) on
-    equilibrium branches. ``value``: the parameter;
+    equilibrium branches; "branch-point" on both (another branch of solutions crosses
+    this one: det [DG; tᵀ] changes sign, a multiplier passes +1 (an eigenvalue 0) with
+    no fold; for orbits: a pitchfork of a symmetric orbit, or the period-doubling
+    point seen from the doubled branch). ``value``: the parameter;
     ``index``: the branch point just before it (for "section-grazing": the last point,
     within ``ds_min`` in arclength of the event); ``point``: the state there.
     """
@@ -43,7 +47,7 @@ class Bifurcation:
     def label(self) -> str:
         return {"fold": "F", "period-doubling": "PD", "neimark-sacker": "NS",
                 "section-grazing": "G", "hopf": "H", "stick-phase": "S",
-                "symmetry-breaking": "SB"}[self.kind]  # fmt: skip
+                "symmetry-breaking": "SB", "branch-point": "BP"}[self.kind]  # fmt: skip
 
 
 @dataclass
@@ -77,7 +81,10 @@ class Branch:
     status : str
         Why the branch ended: "bounds" (the last point lies on one of them),
         "max-points", "step-too-small" (the corrector failed at ds_min),
-        "nonsmooth" (a section grazing, recorded in ``bifurcations``) or
+        "nonsmooth" (a section grazing, recorded in ``bifurcations``),
+        "singular" (the corrector's tolerance no longer fixes the points along the
+        branch: DG is singular to its precision off the tangent, docs/orbits.md,
+        "Branch points") or
         "precision-limit" (past a sharp end, in the tighter stages of
         ``sharp_ends``: the steps crawl because Newton's reach has shrunk to
         the integration's precision).

@@ -17,15 +17,8 @@ switching at a period-doubling), :mod:`.equilibrium_branch` (equilibria) and
 from __future__ import annotations
 
 from .arclength import (  # noqa: F401
-    NOISE_FLOOR,
     STALL_WINDOW,
-    Evaluator,
-    _correct,
-    _locate,
-    _locate_change,
     _restart,
-    _round_off_floor,
-    _tangent,
     pseudo_arclength,
 )
 from .branch import (  # noqa: F401
@@ -34,6 +27,15 @@ from .branch import (  # noqa: F401
     Bifurcation,
     Branch,
     join_branches,
+)
+from .corrector import (  # noqa: F401
+    NOISE_FLOOR,
+    Evaluator,
+    _correct,
+    _locate,
+    _locate_change,
+    _round_off_floor,
+    _tangent,
 )
 from .detection import (  # noqa: F401
     _eigs_by_real_part,

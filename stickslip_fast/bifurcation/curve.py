@@ -20,8 +20,8 @@ import numpy as np
 from ..base.journal import journal
 from ..base.messages import plain
 from ..model.system import SWEEPABLE
-from .arclength import _locate_change
 from .branch import Bifurcation, Branch
+from .corrector import _locate_change
 from .curverecord import Codim2Point, Curve
 from .detection import _sorted_eigs
 from .eqcurve import EQUILIBRIUM_CURVE_KINDS, continue_equilibrium_curve

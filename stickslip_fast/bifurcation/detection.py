@@ -1,8 +1,9 @@
 """Bifurcation test functions along a branch (the locators that use them are in arclength.py).
 
 Orbits: folds (a multiplier through +1), period-doublings (through -1), Neimark-Sacker
-points (a complex pair through the unit circle); equilibria: folds and Hopf points. A
-change in the orbit's stick phases is located by bisection."""
+points (a complex pair through the unit circle); equilibria: folds and Hopf points; both:
+branch points, where another branch crosses (:func:`branch_point_test`). A change in the
+orbit's stick phases is located by bisection."""
 
 from __future__ import annotations
 
@@ -45,3 +46,36 @@ def _eigs_by_real_part(J):
 def _sorted_eigs(A):
     ev = np.linalg.eigvals(A).astype(complex)
     return ev[np.argsort(-np.abs(ev), kind="stable")]
+
+
+#: The kind of a branch point: two branches of solutions cross (label BP).
+BRANCH_POINT = "branch-point"
+
+
+def _bordered(DG: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """[DG; t^T]: the Jacobian of the corrector's system, regular at regular points and
+    at folds, singular where a second branch crosses."""
+    return np.vstack([DG, t[None, :]])
+
+
+def branch_point_test(DG: np.ndarray, t: np.ndarray) -> float:
+    """The branch-point test: det [DG; t^T], rows scaled to unit length.
+
+    With t the tangent oriented continuously along the branch, it changes sign where
+    a second branch of solutions crosses (a simple branch point: the null space of DG
+    is two-dimensional there), and keeps its sign through a fold (AUTO and MatCont
+    use the same determinant). Scaling the rows bounds it by 1 (Hadamard) and leaves
+    its sign and zeros alone."""
+    M = _bordered(DG, t)
+    return float(np.linalg.det(M / np.linalg.norm(M, axis=1)[:, None]))
+
+
+def point_spread(DG: np.ndarray, t: np.ndarray, tol: float) -> float:
+    """How far a point converged to ``tol`` can lie from the exact branch point:
+    tol times the norm of [DG; t^T]'s inverse (inf where it is singular).
+
+    Large where DG is nearly singular in a direction other than the tangent: the
+    corrector's residual no longer pins the point down along that direction, and the
+    tangent, the fold test and the branch-point test there are noise."""
+    smallest = float(np.linalg.svd(_bordered(DG, t), compute_uv=False)[-1])
+    return math.inf if smallest == 0.0 else tol / smallest

@@ -80,7 +80,7 @@ def continue_equilibrium(
         xs, eigs, bifs, status = pseudo_arclength(
             evaluate, x0, direction, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max,
             max_points=max_points, tol=tol, tests=_equilibrium_tests,
-            spectrum=_eigs_by_real_part,
+            spectrum=_eigs_by_real_part, branch_points=True,
         )  # fmt: skip
     return Branch(
         system=system0,

@@ -28,7 +28,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .arclength import _correct, _tangent, pseudo_arclength
+from .arclength import pseudo_arclength
+from .corrector import _correct, _tangent
 
 #: Kinds of codim-1 curves :func:`follow_curve` continues (the shift of M = D_z G + shift I).
 CURVE_KINDS = {"fold": 0.0, "period-doubling": 2.0}

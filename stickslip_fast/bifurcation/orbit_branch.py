@@ -10,11 +10,12 @@ from typing import Any
 import numpy as np
 
 from ..base.journal import journal
-from .arclength import _locate_change, pseudo_arclength
+from .arclength import pseudo_arclength
 from .branch import Bifurcation, Branch
+from .corrector import _locate_change
 from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS, MESH_LIMIT
 from .multishoot_branch import append_branch, continue_multiple, ms_start
-from .orbit_record import multipliers_stable
+from .orbit_record import marks_branch_points, multipliers_stable
 from .orbits import (
     EQUILIBRIUM_SPEED,
     SECTION_INDEX,
@@ -305,8 +306,7 @@ def _stick_events(xs, T, system_at, full, evaluate, periods, tol, bifs):
         if a >= 0 and b >= 0 and a != b:
             loc = _locate_change(
                 evaluate, xs[i], xs[i + 1], a,
-                lambda x: geometry(x, periods.get(x.tobytes(), math.nan))[0],
-                tol, 1e-8,
+                lambda x: geometry(x, periods.get(x.tobytes(), math.nan))[0], tol, 1e-8,
             )  # fmt: skip
             bifs.append(("stick-phase", float(loc[-1]), i, loc))
     return stick_count, stick_time
@@ -453,8 +453,9 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
     x0 = np.r_[orbit.points[0][mask], lam0]
     evaluate(x0)
     last = {}
-    # an in-phase branch also marks where a transverse multiplier passes +1
+    # an in-phase branch also marks where a transverse multiplier passes +1; most, branch points
     evaluate, refine, marks = in_phase_walk(orbit, system_at, full, evaluate, refine, periods)
+    marks["branch_points"] = marks_branch_points(system0)
 
     def keep_tangent(x, data, walk):  # the tangent at each accepted point, oriented onwards
         last["t"] = walk.t.copy()

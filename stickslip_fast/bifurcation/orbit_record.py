@@ -19,6 +19,13 @@ ORBIT_STATUSES = (
 )
 
 
+def marks_branch_points(system) -> bool:
+    """Whether an orbit branch of ``system`` looks for branch points: not for N >= 2
+    disks on a constant belt, whose uncoupled disks keep their phases (N - 1
+    multipliers are exactly 1, so DG is singular all along every branch)."""
+    return bool(system.is_dc_motor or system.n_oscillators == 1)
+
+
 def multipliers_stable(system: System, multipliers: np.ndarray) -> np.ndarray | bool:
     """Whether orbits with these multipliers (shape (..., n_state - 1)) are stable.
 

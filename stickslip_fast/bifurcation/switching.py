@@ -1,5 +1,6 @@
-"""Branch switching at a period-doubling (the doubled orbit) and at a symmetry-breaking
-point (the orbits with the disks apart): their starts, and their Newton solves."""
+"""Branch switching at a period-doubling (the doubled orbit), at a symmetry-breaking
+point (the orbits with the disks apart) and at a branch point (the crossing branch):
+their starts, and their Newton solves."""
 
 from __future__ import annotations
 
@@ -8,8 +9,9 @@ import math
 
 import numpy as np
 
-from .arclength import Evaluator, _correct
 from .branch import Bifurcation, Branch
+from .corrector import Evaluator, _correct
+from .detection import BRANCH_POINT
 from .multishoot import DEFAULT_SEGMENTS
 from .orbit_branch import _orbit_evaluator
 from .orbits import (
@@ -40,7 +42,7 @@ SWITCH_DELTAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
 FLAT = 10.0
 
 #: The bifurcation kinds :func:`switch_branch` switches at.
-SWITCH_KINDS = ("period-doubling", SYMMETRY_BREAKING)
+SWITCH_KINDS = ("period-doubling", SYMMETRY_BREAKING, BRANCH_POINT)
 
 
 def period_doubling_start(
@@ -90,12 +92,15 @@ def period_doubling_start(
 
 
 #: :func:`switch_branch`'s docstring (kept out of the body: the layout rule counts lines).
-_SWITCH_BRANCH_DOC = """The orbit born at a period-doubling or symmetry-breaking point of an orbit branch.
+_SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking or branch point of an orbit branch.
 
     At a period-doubling, the period-doubled orbit; at a symmetry-breaking point of
     a branch of in-phase orbits (docs/orbits.md, "In-phase orbits"), one of the two
     orbits of the same period with the disks apart (the other is it with the disks
-    swapped), started along the transverse eigenvector of the multiplier +1.
+    swapped), started along the transverse eigenvector of the multiplier +1; at a
+    branch point, an orbit of the crossing branch, started along the null direction
+    of DG orthogonal to the branch (docs/orbits.md, "Branch points"; offsets
+    smallest first, each on both sides).
 
     Parameters
     ----------
@@ -103,7 +108,7 @@ _SWITCH_BRANCH_DOC = """The orbit born at a period-doubling or symmetry-breaking
         A branch of period-p orbits (:func:`continue_orbit`).
     bifurcation : Bifurcation or int
         One of ``branch.bifurcations`` (or its index there), of kind
-        "period-doubling" or "symmetry-breaking".
+        "period-doubling", "symmetry-breaking" or "branch-point".
     deltas : tuple of float
         Offsets along the eigenvector to try, in order (:func:`period_doubling_start`).
         The first that gives a fixed point of P^2p that is not one of P^p wins. At a
@@ -140,8 +145,8 @@ _SWITCH_BRANCH_DOC = """The orbit born at a period-doubling or symmetry-breaking
     Raises
     ------
     ValueError
-        For a branch of equilibria, a bifurcation that is not a period-doubling
-        or symmetry-breaking point of this branch (or a symmetry-breaking point
+        For a branch of equilibria, a bifurcation that is not a period-doubling,
+        symmetry-breaking or branch point of this branch (or a symmetry-breaking point
         off the in-phase orbits), non-positive deltas, an unknown ``shooting`` or
         a bad ``segments`` (naming the argument).
     """
@@ -163,6 +168,8 @@ def switch_branch(
     polish = dict(tol=tol, rtol=rtol, atol=atol, shooting=shooting, segments=int(segments))
     if bifurcation.kind == SYMMETRY_BREAKING:
         return _switch_apart(branch, bifurcation, deltas, fd_step, polish)
+    if bifurcation.kind == BRANCH_POINT:
+        return _switch_crossing(branch, bifurcation, deltas, fd_step, polish)
     p = branch.period
     mask = np.arange(branch.system.n_state) != SECTION_INDEX
     lam_pd = float(bifurcation.value)
@@ -234,8 +241,8 @@ def _check_switch(branch, bifurcation, deltas, shooting, segments) -> Bifurcatio
     if not isinstance(bifurcation, Bifurcation) or bifurcation.kind not in SWITCH_KINDS:
         kind = getattr(bifurcation, "kind", type(bifurcation).__name__)
         raise ValueError(
-            f"bifurcation must be a period-doubling or symmetry-breaking point of the branch, "
-            f"got {kind!r}"
+            f"bifurcation must be a period-doubling, symmetry-breaking or branch point of the "
+            f"branch, got {kind!r}"
         )
     if not deltas or not all(isinstance(d, (int, float)) and math.isfinite(d) and d > 0
                              for d in deltas):  # fmt: skip
@@ -294,3 +301,46 @@ def _switch_apart(branch: Branch, bif: Bifurcation, deltas, fd_step: float, poli
     return _not_found(last, s_sb, z, p, tol, rtol, atol,
                       f"no period-{p} orbit with the disks apart found along the transverse "
                       f"eigenvector (offsets tried: {offsets})")  # fmt: skip
+
+
+def _switch_crossing(branch: Branch, bif: Bifurcation, deltas, fd_step: float, polish) -> Orbit:
+    """switch_branch at a branch point: an orbit of the branch that crosses this one.
+
+    At a simple branch point DG has a two-dimensional null space, which holds both
+    branches' tangents. The start leaves along phi, the null direction orthogonal to
+    the branch's own tangent (the chord through the point), and is corrected within the
+    hyperplane normal to phi through the predictor, which the old branch (tangent to
+    it) does not reach nearby; a result more than delta / 2 from the predictor is not
+    the crossing branch. Offsets are tried smallest first, each on both sides."""
+    p, system = branch.period, branch.system
+    rtol, atol, tol = polish["rtol"], polish["atol"], polish["tol"]
+    mask = np.arange(system.n_state) != SECTION_INDEX
+    lam, z = float(bif.value), np.asarray(bif.point, dtype=float)
+    evaluate, full, system_at, _ = _orbit_evaluator(system, branch.param, p, rtol, atol, fd_step)
+    x_bp = np.r_[z[mask], lam]
+    ok, _, DG, _ = evaluate(x_bp)
+    if not ok:
+        raise ValueError("the return map fails at the bifurcation point")
+    i = min(bif.index, len(branch.values) - 2)
+    chord = np.r_[(branch.points[i + 1] - branch.points[i])[mask],
+                  branch.values[i + 1] - branch.values[i]]  # fmt: skip
+    null = np.linalg.svd(DG)[2][-2:]  # the two right singular vectors nearest the null space
+    tc = null @ chord  # the branch's tangent in that plane's coordinates
+    phi = null.T @ np.array([-tc[1], tc[0]])
+    phi /= np.linalg.norm(phi)
+    last, tried = None, []
+    for delta in sorted(deltas):
+        tried.append(delta)
+        for sign in (1.0, -1.0):
+            x_pred = x_bp + sign * delta * phi
+            ok, x, _, _ = _correct(evaluate, x_pred, phi, x_pred, tol, 8)
+            if not ok or np.linalg.norm(x - x_pred) > 0.5 * delta:
+                continue
+            last = find_orbit(system_at(x[-1]), full(x), p, **polish)
+            # still off the old branch (Newton at fixed lambda could have fallen back on it)
+            off = abs(phi @ (np.r_[last.points[0][mask], x[-1]] - x_bp))
+            if last.converged and off > 0.5 * delta:
+                return last
+    offsets = ", ".join(f"{d:g}" for d in tried)
+    return _not_found(last, system_at(lam), z, p, tol, rtol, atol,
+                      f"no period-{p} orbit of a crossing branch found (offsets tried: {offsets})")  # fmt: skip

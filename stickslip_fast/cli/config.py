@@ -54,7 +54,7 @@ Layout (every section optional except what the command needs)::
     # ds, ds_min, ds_max, max_points, tol   (see continue_orbit)
     # shooting = "single"|"multiple"|"auto", segments, remesh, max_segments   (multiple shooting)
     # param2, bounds2, direction2, kinds2   (the codim-1 points' curves in a 2nd parameter)
-    # switch = true       # also follow the orbits born at each period-doubling / symmetry-breaking
+    # switch = true       # also follow the orbits born at each PD / SB / branch point
     # sharp_ends = false  # do not retry with tighter settings where the corrector fails
     # stick_events = false  # do not count stick phases (branch and curves)
 

@@ -105,11 +105,13 @@ def _curves(branch, curve, tol, stick_events, args, say):
 
 def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, continue_orbit):
     """[continue].switch: from each period-doubling of ``branch``, the doubled orbit's
-    branch, and from each symmetry-breaking point, the branch with the disks apart, each
-    continued away from it, into OUTPUT's stem + ``.pd<k>.h5`` / ``.sb<k>.h5``."""
+    branch, from each symmetry-breaking point, the branch with the disks apart, and from
+    each branch point, the crossing branch, each continued away from it, into OUTPUT's
+    stem + ``.pd<k>.h5`` / ``.sb<k>.h5`` / ``.bp<k>.h5``."""
     out = Path(args.output)
     found = False
-    for kind, tag in (("period-doubling", "pd"), ("symmetry-breaking", "sb")):
+    for kind, tag in (("period-doubling", "pd"), ("symmetry-breaking", "sb"),
+                      ("branch-point", "bp")):  # fmt: skip
         bifs = [b for b in branch.bifurcations if b.kind == kind]
         found = found or bool(bifs)
         for k, bif in enumerate(bifs, start=1):
@@ -130,7 +132,7 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
                       f"{kind} at {bif.value:.10g})")  # fmt: skip
                 print(new.summary())
     if not found:
-        say("switch: the branch has no period-doubling and no symmetry-breaking point")
+        say("switch: the branch has no period-doubling, symmetry-breaking or branch point")
 
 
 def _orbit_from_config(cfg: RunConfig, param: str, period, say):

@@ -1,0 +1,214 @@
+"""Branch points: where a second branch of solutions crosses the one being followed.
+
+The test function is det [DG; tᵀ] (rows scaled); it is checked on maps whose branch
+points are known in closed form (a pitchfork and a transcritical bifurcation of a map's
+fixed points, a fold that must stay a fold), on a map whose Jacobian is singular to the
+corrector's tolerance in a direction off the branch (the walk ends "singular"), and on the
+engine's anti-phase branch of two disks on one motor, against the multipliers of
+find_orbit on both sides of each point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import stickslip_fast as ssf
+from stickslip_fast.bifurcation.arclength import pseudo_arclength
+from stickslip_fast.bifurcation.detection import branch_point_test, point_spread
+
+KW = dict(ds=0.05, ds_min=1e-6, ds_max=0.1, max_points=200, tol=1e-12, branch_points=True)
+
+
+def pitchfork_map(x):
+    # P(z; lam) = (z1 + z1 (lam - z1^2), z2 / 2): the fixed points z1 = 0 (multiplier
+    # 1 + lam) and z1^2 = lam (multiplier 1 - 2 lam) cross at the pitchfork lam = 0
+    z1, z2, lam = x
+    A = np.diag([1 + lam - 3 * z1 * z1, 0.5])
+    G = np.array([z1 * (lam - z1 * z1), -0.5 * z2])
+    return True, G, np.hstack([A - np.eye(2), np.array([[z1], [0.0]])]), A
+
+
+def transcritical_map(x):
+    # P(z; lam) = (z1 + z1 (lam - z1), z2 / 2): the fixed points z1 = 0 and z1 = lam
+    # exchange stability at lam = 0
+    z1, z2, lam = x
+    A = np.diag([1 + lam - 2 * z1, 0.5])
+    G = np.array([z1 * (lam - z1), -0.5 * z2])
+    return True, G, np.hstack([A - np.eye(2), np.array([[z1], [0.0]])]), A
+
+
+def fold_map(x):
+    # P(z; lam) = (z1 + lam - z1^2, z2 / 2): a fold at lam = 0, no other branch
+    z1, z2, lam = x
+    A = np.diag([1 - 2 * z1, 0.5])
+    G = np.array([lam - z1 * z1, -0.5 * z2])
+    return True, G, np.hstack([A - np.eye(2), np.array([[1.0], [0.0]])]), A
+
+
+def kinds(bifs):
+    return [b[0] for b in bifs]
+
+
+def test_the_trivial_branch_marks_the_pitchfork():
+    xs, mults, bifs, status = pseudo_arclength(
+        pitchfork_map, np.array([0.0, 0.0, -0.47]), 1.0, (-0.5, 0.5), **KW
+    )
+    assert status == "bounds" and kinds(bifs) == ["branch-point"]
+    kind, lam, idx, x = bifs[0]
+    assert abs(lam) < 1e-9 and np.max(np.abs(x[:2])) < 1e-12
+    # the multiplier 1 + lam passes +1 there, with no fold: the other tests stay silent
+    assert mults[idx, 0].real < 1 < mults[idx + 1, 0].real
+    # without the test the stability changes with no label at all (as before it existed)
+    _, _, bifs0, _ = pseudo_arclength(
+        pitchfork_map,
+        np.array([0.0, 0.0, -0.47]),
+        1.0,
+        (-0.5, 0.5),
+        **dict(KW, branch_points=False),
+    )
+    assert bifs0 == []
+    # a step that lands on the point itself (-0.5 + 10 ds = 0): no tangent there
+    xs, _, _, status = pseudo_arclength(
+        pitchfork_map, np.array([0.0, 0.0, -0.5]), 1.0, (-0.5, 0.5), **dict(KW, ds_max=0.05)
+    )
+    assert status == "singular" and abs(xs[-1, 2] + 0.05) < 1e-12
+
+
+def test_the_side_branch_turns_at_the_pitchfork_and_is_not_called_a_fold():
+    start = np.array([0.5, 0.0, 0.25])
+    xs, _, bifs, status = pseudo_arclength(pitchfork_map, start, -1.0, (-0.5, 0.5), **KW)
+    assert status == "bounds"
+    assert kinds(bifs) == ["branch-point"]  # not "fold", though lambda turns there
+    # G is quadratic in the distance from a branch point: with tol 1e-12 the point is
+    # fixed only to ~sqrt(tol) (measured: lambda 1.8e-6, z1 1.7e-7)
+    assert abs(bifs[0][1]) < 1e-5 and abs(bifs[0][3][0]) < 1e-5
+    np.testing.assert_allclose(xs[:, 0] ** 2, xs[:, 2], atol=1e-10)
+    assert xs[-1, 0] < -0.5  # it went on through the point, to the other half
+
+
+def test_the_transcritical_point_is_marked_on_both_branches():
+    for start in ([0.0, 0.0, -0.47], [-0.47, 0.0, -0.47]):
+        xs, mults, bifs, status = pseudo_arclength(
+            transcritical_map, np.array(start), 1.0, (-0.5, 0.5), **KW
+        )
+        assert status == "bounds" and kinds(bifs) == ["branch-point"]
+        assert abs(bifs[0][1]) < 1e-9
+        idx = bifs[0][2]
+        # the two branches exchange stability there
+        assert (abs(mults[idx, 0]) - 1) * (abs(mults[idx + 1, 0]) - 1) < 0
+
+
+def test_a_fold_stays_a_fold():
+    xs, _, bifs, status = pseudo_arclength(
+        fold_map, np.array([0.5, 0.0, 0.25]), -1.0, (-1.0, 1.5), **KW
+    )
+    assert status == "bounds" and kinds(bifs) == ["fold"] and abs(bifs[0][1]) < 1e-8
+    # det [DG; t] keeps its sign through the fold, at a distance from 0
+    _, _, DG, _ = fold_map(bifs[0][3])
+    t = np.array([1.0, 0.0, 0.0])
+    assert abs(branch_point_test(DG, t)) == pytest.approx(1.0)
+
+
+def test_a_jacobian_singular_to_the_tolerance_ends_the_walk():
+    # a second fixed-point direction whose residual is eps (z2 - z1) small: the corrector's
+    # tol no longer fixes the point along it, and the tangent is noise there
+    def nearly_neutral(eps):
+        def evaluate(x):
+            z1, z2, lam = x
+            G = np.array([lam - z1 * z1, eps * (z2 - z1)])
+            DG = np.array([[-2 * z1, 0.0, 1.0], [-eps, eps, 0.0]])
+            return True, G, DG, DG[:, :2] + np.eye(2)
+
+        return evaluate
+
+    start = np.array([0.5, 0.5, 0.25])
+    xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-3), start, -1.0, (-1.0, 1.5), **KW)
+    assert status == "bounds" and kinds(bifs) == ["fold"]
+    xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-12), start, -1.0, (-1.0, 1.5), **KW)
+    assert status == "singular" and len(xs) == 1 and not bifs
+    # the spread is tol over the smallest singular value of [DG; t], here of order eps:
+    # the start is fixed only to ~0.8, far more than the first step (0.05)
+    _, _, DG, _ = nearly_neutral(1e-12)(start)
+    t = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)  # DG t = 0
+    smallest = np.linalg.svd(np.vstack([DG, t]), compute_uv=False)[-1]
+    assert point_spread(DG, t, 1e-12) == pytest.approx(1e-12 / smallest)
+    assert point_spread(DG, t, 1e-12) > 0.5
+
+
+# --------------------------------------------------------------- on the engine
+def _anti_phase(eta: float, point: list[float]) -> ssf.Orbit:
+    # Figs. 14-15: two disks of the symmetric set on one motor; the paper's start (disk 2
+    # displaced) settles at eta = 3 on this orbit, disk 2 about half a period behind disk 1
+    system = ssf.System.preset("symmetric", drive="dc-motor", n_oscillators=2, eta=eta)
+    orbit = ssf.find_orbit(system, np.array(point))
+    assert orbit.converged and orbit.period == 1
+    return orbit
+
+
+def _leading_real(orbit: ssf.Orbit) -> float:
+    mu = orbit.multipliers
+    return float(mu[np.argmin(np.abs(mu - 1.0))].real)
+
+
+@pytest.fixture(scope="module")
+def anti_branch():
+    # from its point at eta = 1.7202 (a branch walked down from the paper's start at eta = 3)
+    start = _anti_phase(1.7202475596551963, [0.012102199873405984, 0.0, 0.0, 0.0,
+                        0.06455177287803203, 0.009646957844271574, 0.0, 0.0,
+                        0.009650344399020629])  # fmt: skip
+    return start, ssf.continue_orbit(start, "eta", (1.35, 1.8), direction=-1)
+
+
+def test_the_anti_phase_branch_has_two_branch_points(anti_branch):
+    start, branch = anti_branch
+    bps = [b for b in branch.bifurcations if b.kind == "branch-point"]
+    assert [b.label for b in bps] == ["BP", "BP"]
+    assert not [b for b in branch.bifurcations if b.kind == "fold"]
+    # find_orbit's multiplier (rtol 1e-12) passes 1 at 1.57269836 (a secant to 1e-10 in mu)
+    # and at 1.41183 (0.776 at 1.4116, 0.972 at 1.4118: dmu/deta ~ 1e3). The second is
+    # sharp: its side branch is 4e-5 away 8e-5 past it, and the locator's trials land on
+    # either (measured 1.4118317 walked from eta = 3, 1.4118753 from here). G is quadratic
+    # near a branch point: located to ~sqrt(tol) (measured 2.6e-7 off at the first)
+    assert abs(bps[0].value - 1.57269836) < 1e-6 and abs(bps[1].value - 1.41183) < 1e-4
+    # the reference: find_orbit on both sides of the first point, 1e-3 away: a real
+    # multiplier passes +1 (past the second, find_orbit finds the side branch: stable, the
+    # pitchfork is supercritical)
+    for d in (-1e-3, 1e-3):
+        orbit = ssf.find_orbit(start.system.replace(eta=bps[0].value + d), bps[0].point)
+        assert orbit.converged and (_leading_real(orbit) > 1.0) is (d < 0)
+    assert branch.stable[bps[0].index] and not branch.stable[bps[0].index + 1]
+    assert not branch.stable[bps[1].index] and branch.stable[bps[1].index + 1]
+
+
+def test_the_anti_phase_branch_ends_singular_where_a_disk_is_nearly_undamped():
+    # lower down, disk 2's oscillation shrinks to nearly undamped steady sliding (no
+    # viscous damping, c = 0: the sliding equilibrium's eigenvalues are -2.6e-6 +- i at
+    # eta = 1.1): a multiplier tends to 1 and the walk, past 1e-7 from it, could no longer
+    # tell the tangent from noise (it reported 13 "folds" within 3e-5 in eta near 1.02404)
+    start = _anti_phase(1.1275682582876292, [0.03734505165096868, 0.0, 0.0, 0.0,
+                        0.060820214617317424, 0.0009027951066187418, 0.0, 0.0,
+                        0.00979440927478325])  # fmt: skip
+    branch = ssf.continue_orbit(start, "eta", (1.0, 1.2), direction=-1)
+    assert branch.status == "singular" and not branch.bifurcations
+    assert 1.024 < branch.values[-1] < 1.06  # measured 1.0284 (from eta = 3)
+    assert abs(branch.multipliers[-1][0] - 1.0) < 1e-5
+
+
+def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
+    start, branch = anti_branch
+    bp = next(b for b in branch.bifurcations if b.kind == "branch-point")
+    orbit = ssf.switch_branch(branch, bp, deltas=(1e-4,))
+    assert orbit.converged and orbit.period == 1
+    eta = orbit.system.eta
+    assert abs(eta - bp.value) < 1e-4  # measured 8.5e-6
+    # the reference: the anti-phase orbit at the same eta (find_orbit from the branch
+    # point): the switched orbit is another one, about the offset away
+    same = ssf.find_orbit(orbit.system, bp.point)
+    assert same.converged
+    gap = np.max(np.abs(orbit.points[0] - same.points[0]))
+    assert 5e-5 < gap < 2e-4  # measured 1.0e-4
+    # and it is a fixed point of the map at its eta to the corrector's tolerance
+    assert orbit.residual < 1e-9
+    with pytest.raises(ValueError, match="branch point"):
+        ssf.switch_branch(branch, ssf.Bifurcation("fold", bp.value, bp.index, bp.point))
