@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .corrector import NOISE_FLOOR, Evaluator, _correct, _locate, _tangent
-from .detection import BRANCH_POINT, _sorted_eigs, _tests, branch_point_test, point_spread
+from .detection import BRANCH_POINT, RANK_GAP_MIN, _sorted_eigs, _tests, branch_point_test, rank_gap
 from .progress import walk_reporter
 
 #: A branch ends with status "precision-limit" where its last this many steps together
@@ -72,11 +72,10 @@ stall_ds_min : float, optional
 branch_points : bool
     Also mark branch points (kind "branch-point": the sign of det [DG; tᵀ],
     :func:`.detection.branch_point_test`; a fold located in the same step as a
-    branch point is the branch point: a pitchfork's side branch turns there) and
-    end the branch with status "singular" at a point whose position the
-    corrector's ``tol`` no longer fixes to within half its step
-    (:func:`.detection.point_spread`): DG is singular there to the evaluation's
-    precision, and the tangent and the tests with it are noise.
+    branch point is the branch point: a pitchfork's side branch turns there), and
+    report no fold and no branch point from a step with an end where DG has a
+    second null direction within :data:`.detection.RANK_GAP_MIN` of its largest
+    singular value (:func:`.detection.rank_gap`): the tangent is noise there.
 stop : callable, optional
     (x, A, walk) -> True ends the branch after accepting x (its map's Jacobian
     A) with status "stopped" (for a change of coordinates; ``walk`` holds the
@@ -98,8 +97,8 @@ xs, mults, bifs, status
     The points (k, m + 1), their multipliers (k, m), the located
     bifurcations (kind, lambda, index, x) and the reason the branch ended:
     "bounds", "max-points", "step-too-small" (the corrector failed),
-    "nonsmooth" (steps kept jumping off the branch), "stopped" (``stop``),
-    "singular" (``branch_points``) or "precision-limit"
+    "nonsmooth" (steps kept jumping off the branch), "stopped" (``stop``) or
+    "precision-limit"
     (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
     less than ``ds_min``; or the last corrector stopped at the residual's
     round-off floor, :func:`_correct`, with no stage left).
@@ -145,9 +144,6 @@ def pseudo_arclength(
                 status = "nonsmooth" if trial.jumped else "step-too-small"
                 if trial.floored:  # the residual's noise, not the step, stopped the corrector
                     status = "precision-limit"
-                break
-            if branch_points and walk.unresolved(x, trial.x_new, trial.data[1]):
-                status = "singular"
                 break
             walk.accept(x, trial.x_new, trial.data, locate_tol)
             if report is not None:
@@ -259,6 +255,8 @@ class _Walk:
     mults: list[np.ndarray] = field(default_factory=list)
     tests: list[dict[str, float]] = field(default_factory=list)
     bifs: list[tuple[str, float, int, np.ndarray]] = field(default_factory=list)
+    gaps: list[float] = field(default_factory=list)  # rank_gap(DG) per point (branch_points)
+    branch_points: bool = False
 
     @classmethod
     def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, tests, spectrum,
@@ -279,20 +277,16 @@ class _Walk:
                 out[BRANCH_POINT] = branch_point_test(DG, t)
             return out
 
-        walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()])
+        walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()],
+                   branch_points=branch_points)  # fmt: skip
         walk.mults.append(spectrum(A))
         walk.tests.append(test_fn(A, DG, t))
+        walk.gaps.append(walk.gap(DG))
         return walk
 
-    def unresolved(self, x: np.ndarray, x_new: np.ndarray, DG: np.ndarray) -> bool:
-        """x_new's position along the branch is not fixed by the corrector's tolerance to
-        within half the step from x (:func:`.detection.point_spread`), or it lies on a
-        point where DG is singular (no tangent)."""
-        try:
-            spread = point_spread(DG, _tangent(DG, self.t), self.tol)
-        except np.linalg.LinAlgError:
-            return True
-        return spread > 0.5 * float(np.linalg.norm(x_new - x))
+    def gap(self, DG: np.ndarray) -> float:
+        """:func:`.detection.rank_gap` of DG where the walk looks for branch points."""
+        return rank_gap(DG) if self.branch_points else math.inf
 
     def accept(self, x: np.ndarray, x_new: np.ndarray, data, locate_tol: float) -> None:
         """Append x_new (corrected, with ``data`` = (G, DG, A)), locating the bifurcations
@@ -308,6 +302,9 @@ class _Walk:
         }
         if BRANCH_POINT in changed:  # a pitchfork's side branch turns at the branch point
             changed.discard("fold")
+        gap = self.gap(DG)
+        if min(gap, self.gaps[-1]) < RANK_GAP_MIN:  # a second null direction: t is noise
+            changed -= {"fold", BRANCH_POINT}
         for kind, prev in self.tests[-1].items():
             cur = te[kind]
             if kind in changed:
@@ -318,6 +315,7 @@ class _Walk:
         self.xs.append(x_new)
         self.mults.append(self.spectrum(A))
         self.tests.append(te)
+        self.gaps.append(gap)
         self.t = t_new
 
     def next_stage(self, max_corrector: int) -> bool:
@@ -333,7 +331,8 @@ class _Walk:
             return False
         j, x_re, (_, DG, A) = restart
         self.t = _tangent(DG, self.xs[j] - self.xs[j - 1] if j > 0 else self.t)
-        del self.xs[j + 1 :], self.mults[j + 1 :], self.tests[j + 1 :]
+        del self.xs[j + 1 :], self.mults[j + 1 :], self.tests[j + 1 :], self.gaps[j + 1 :]
+        self.gaps[j] = self.gap(DG)
         self.xs[j] = x_re
         self.mults[j] = self.spectrum(A)
         self.tests[j] = self.test_fn(A, DG, self.t)

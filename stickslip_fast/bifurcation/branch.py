@@ -81,10 +81,7 @@ class Branch:
     status : str
         Why the branch ended: "bounds" (the last point lies on one of them),
         "max-points", "step-too-small" (the corrector failed at ds_min),
-        "nonsmooth" (a section grazing, recorded in ``bifurcations``),
-        "singular" (the corrector's tolerance no longer fixes the points along the
-        branch: DG is singular to its precision off the tangent, docs/orbits.md,
-        "Branch points") or
+        "nonsmooth" (a section grazing, recorded in ``bifurcations``) or
         "precision-limit" (past a sharp end, in the tighter stages of
         ``sharp_ends``: the steps crawl because Newton's reach has shrunk to
         the integration's precision).
