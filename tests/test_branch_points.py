@@ -120,12 +120,16 @@ def test_no_fold_is_read_from_a_tangent_that_is_noise():
     start = np.array([0.5, 0.5, 0.25])
     _, _, DG, _ = nearly_neutral(1e-9)(start)
     assert rank_gap(DG) == pytest.approx(1e-9 * np.sqrt(3.0) / 2.0, rel=1e-6)
-    xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-3), start, -1.0, (-1.0, 1.5), **KW)
+    kw = dict(KW, noise_gap=RANK_GAP_MIN)  # as orbit branches have it
+    xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-3), start, -1.0, (-1.0, 1.5), **kw)
     assert status == "bounds" and kinds(bifs) == ["fold"] and abs(bifs[0][1]) < 1e-8
     assert 1e-3 * np.sqrt(3.0) / 2.0 > RANK_GAP_MIN
-    xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-9), start, -1.0, (-1.0, 1.5), **KW)
+    xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-9), start, -1.0, (-1.0, 1.5), **kw)
     assert xs[:, 0].min() < 0 < xs[:, 0].max()  # the walk passed the turn, unlabelled
     assert bifs == []
+    # with the rule off (the default of pseudo_arclength) the same turn is read as a fold
+    _, _, bifs, _ = pseudo_arclength(nearly_neutral(1e-9), start, -1.0, (-1.0, 1.5), **KW)
+    assert kinds(bifs) == ["fold"]
 
 
 # --------------------------------------------------------------- on the engine
@@ -188,7 +192,7 @@ def test_no_folds_are_read_where_a_disk_is_nearly_undamped(monkeypatch):
     assert 1.024 < branch.values[-20:].min() and branch.values[-20:].max() < 1.0242
     # the same walk reading its tangent everywhere reports folds there (13 measured
     # with 200 points), none of them the system's
-    monkeypatch.setattr("stickslip_fast.bifurcation.arclength.RANK_GAP_MIN", 0.0)
+    monkeypatch.setattr("stickslip_fast.bifurcation.orbit_record.RANK_GAP_MIN", 0.0)
     noisy = ssf.continue_orbit(start, "eta", (1.0, 1.2), **kw)
     folds = [b.value for b in noisy.bifurcations if b.kind == "fold"]
     assert len(folds) >= 3 and max(folds) - min(folds) < 1e-4

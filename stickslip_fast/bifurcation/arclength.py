@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .corrector import NOISE_FLOOR, Evaluator, _correct, _locate, _tangent
-from .detection import BRANCH_POINT, RANK_GAP_MIN, _sorted_eigs, _tests, branch_point_test, rank_gap
+from .detection import BRANCH_POINT, _sorted_eigs, _tests, branch_point_test, rank_gap
 from .progress import walk_reporter
 
 #: A branch ends with status "precision-limit" where its last this many steps together
@@ -72,10 +72,13 @@ stall_ds_min : float, optional
 branch_points : bool
     Also mark branch points (kind "branch-point": the sign of det [DG; tᵀ],
     :func:`.detection.branch_point_test`; a fold located in the same step as a
-    branch point is the branch point: a pitchfork's side branch turns there), and
-    report no fold and no branch point from a step with an end where DG has a
-    second null direction within :data:`.detection.RANK_GAP_MIN` of its largest
-    singular value (:func:`.detection.rank_gap`): the tangent is noise there.
+    branch point is the branch point: a pitchfork's side branch turns there).
+noise_gap : float
+    Read no fold and no branch point from a step with an end where DG's smallest
+    singular value is below ``noise_gap`` times its largest
+    (:func:`.detection.rank_gap`): DG has a second null direction to within its
+    noise there, and the tangent is noise (orbits: :data:`.detection.RANK_GAP_MIN`;
+    default 0, off).
 stop : callable, optional
     (x, A, walk) -> True ends the branch after accepting x (its map's Jacobian
     A) with status "stopped" (for a change of coordinates; ``walk`` holds the
@@ -126,9 +129,10 @@ def pseudo_arclength(
     stall_ds_min: float | None = None,
     stop: Callable[[np.ndarray, Any, Any], bool] | None = None,
     branch_points: bool = False,
+    noise_gap: float = 0.0,
 ):
     walk = _Walk.start(evaluate, x0, direction, tol, ds, ds_min, refine, tests,
-                       spectrum or _sorted_eigs, orient, branch_points)  # fmt: skip
+                       spectrum or _sorted_eigs, orient, branch_points, noise_gap)  # fmt: skip
     stall_ds = ds_min if stall_ds_min is None else stall_ds_min
     lo, hi = bounds
     status = "max-points"
@@ -255,12 +259,12 @@ class _Walk:
     mults: list[np.ndarray] = field(default_factory=list)
     tests: list[dict[str, float]] = field(default_factory=list)
     bifs: list[tuple[str, float, int, np.ndarray]] = field(default_factory=list)
-    gaps: list[float] = field(default_factory=list)  # rank_gap(DG) per point (branch_points)
-    branch_points: bool = False
+    gaps: list[float] = field(default_factory=list)  # rank_gap(DG) per point (noise_gap)
+    noise_gap: float = 0.0
 
     @classmethod
     def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, tests, spectrum,
-              orient=None, branch_points=False) -> _Walk:  # fmt: skip
+              orient=None, branch_points=False, noise_gap=0.0) -> _Walk:  # fmt: skip
         """The walk at x0, its tangent oriented by ``direction`` in lambda (or by ``orient``)."""
         ok, G, DG, A = evaluate(x0)
         if not ok:
@@ -278,15 +282,15 @@ class _Walk:
             return out
 
         walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()],
-                   branch_points=branch_points)  # fmt: skip
+                   noise_gap=noise_gap)  # fmt: skip
         walk.mults.append(spectrum(A))
         walk.tests.append(test_fn(A, DG, t))
         walk.gaps.append(walk.gap(DG))
         return walk
 
     def gap(self, DG: np.ndarray) -> float:
-        """:func:`.detection.rank_gap` of DG where the walk looks for branch points."""
-        return rank_gap(DG) if self.branch_points else math.inf
+        """:func:`.detection.rank_gap` of DG (inf where ``noise_gap`` is off)."""
+        return rank_gap(DG) if self.noise_gap > 0 else math.inf
 
     def accept(self, x: np.ndarray, x_new: np.ndarray, data, locate_tol: float) -> None:
         """Append x_new (corrected, with ``data`` = (G, DG, A)), locating the bifurcations
@@ -303,7 +307,7 @@ class _Walk:
         if BRANCH_POINT in changed:  # a pitchfork's side branch turns at the branch point
             changed.discard("fold")
         gap = self.gap(DG)
-        if min(gap, self.gaps[-1]) < RANK_GAP_MIN:  # a second null direction: t is noise
+        if min(gap, self.gaps[-1]) < self.noise_gap:  # a second null direction: t is noise
             changed -= {"fold", BRANCH_POINT}
         for kind, prev in self.tests[-1].items():
             cur = te[kind]

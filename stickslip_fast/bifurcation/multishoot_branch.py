@@ -25,7 +25,7 @@ from .multishoot import (
     remesh,
 )
 from .multishoot_orbit import initial_segments, newton_multiple
-from .orbit_record import marks_branch_points, multipliers_stable
+from .orbit_record import branch_point_marks, multipliers_stable
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
 from .walk_args import WalkSettings
@@ -283,7 +283,7 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
             max_points=left, tol=tol, jump=_jump_test(ms, system_at), refine=refine,
             tests=multiplier_tests, spectrum=periodic_multipliers, orient=orient,
             stall_ds_min=max(settings[0][3], settings[0][0]), stop=trigger,
-            branch_points=marks_branch_points(system0),
+            **branch_point_marks(system0),
         )  # fmt: skip
         pieces.append(_Piece(ms, evaluate, tol, xs, np.asarray(mults), bifs))
         if status != "stopped":

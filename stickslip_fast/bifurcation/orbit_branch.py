@@ -15,7 +15,7 @@ from .branch import Bifurcation, Branch
 from .corrector import _locate_change
 from .multishoot import DEFAULT_SEGMENTS, MAX_SEGMENTS, MESH_LIMIT
 from .multishoot_branch import append_branch, continue_multiple, ms_start
-from .orbit_record import marks_branch_points, multipliers_stable
+from .orbit_record import branch_point_marks, multipliers_stable
 from .orbits import (
     EQUILIBRIUM_SPEED,
     SECTION_INDEX,
@@ -455,7 +455,7 @@ def _continue_single(orbit, param, lam0, lo, hi, direction, walk: WalkSettings):
     last = {}
     # an in-phase branch also marks where a transverse multiplier passes +1; most, branch points
     evaluate, refine, marks = in_phase_walk(orbit, system_at, full, evaluate, refine, periods)
-    marks["branch_points"] = marks_branch_points(system0)
+    marks.update(branch_point_marks(system0))
 
     def keep_tangent(x, data, walk):  # the tangent at each accepted point, oriented onwards
         last["t"] = walk.t.copy()

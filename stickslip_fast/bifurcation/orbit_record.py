@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..model.system import System
+from .detection import RANK_GAP_MIN
 
 #: Outcomes of :func:`find_orbit` (``Orbit.status``).
 ORBIT_STATUSES = (
@@ -19,11 +21,15 @@ ORBIT_STATUSES = (
 )
 
 
-def marks_branch_points(system) -> bool:
-    """Whether an orbit branch of ``system`` looks for branch points: not for N >= 2
-    disks on a constant belt, whose uncoupled disks keep their phases (N - 1
-    multipliers are exactly 1, so DG is singular all along every branch)."""
-    return bool(system.is_dc_motor or system.n_oscillators == 1)
+def branch_point_marks(system) -> dict[str, Any]:
+    """:func:`~stickslip_fast.bifurcation.arclength.pseudo_arclength`'s ``branch_points``
+    and ``noise_gap`` for an orbit branch of ``system``: look for branch points, and read
+    no label where DG has a second null direction to within its noise
+    (:data:`.detection.RANK_GAP_MIN`). Neither for N >= 2 disks on a constant belt,
+    whose uncoupled disks keep their phases (N - 1 multipliers are exactly 1, so DG is
+    singular all along every branch, and its folds were always read so)."""
+    on = bool(system.is_dc_motor or system.n_oscillators == 1)
+    return {"branch_points": on, "noise_gap": RANK_GAP_MIN if on else 0.0}
 
 
 def multipliers_stable(system: System, multipliers: np.ndarray) -> np.ndarray | bool:
