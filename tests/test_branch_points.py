@@ -201,7 +201,7 @@ def test_no_folds_are_read_where_a_disk_is_nearly_undamped(monkeypatch):
 def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
     start, branch = anti_branch
     bp = next(b for b in branch.bifurcations if b.kind == "branch-point")
-    orbit = ssf.switch_branch(branch, bp, deltas=(1e-4,))
+    orbit = ssf.switch_branch(branch, bp)  # the defaults: 1e-4 wins (smaller are too flat)
     assert orbit.converged and orbit.period == 1
     eta = orbit.system.eta
     assert abs(eta - bp.value) < 1e-4  # measured 8.5e-6

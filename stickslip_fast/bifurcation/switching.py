@@ -311,7 +311,9 @@ def _switch_crossing(branch: Branch, bif: Bifurcation, deltas, fd_step: float, p
     the branch's own tangent (the chord through the point), and is corrected within the
     hyperplane normal to phi through the predictor, which the old branch (tangent to
     it) does not reach nearby; a result more than delta / 2 from the predictor is not
-    the crossing branch. Offsets are tried smallest first, each on both sides."""
+    the crossing branch. Offsets are tried smallest first, each on both sides, skipping
+    those whose predictor's residual is already below ``FLAT * tol`` (G is quadratic in
+    the distance from a branch point: such a start passes for a solution anywhere)."""
     p, system = branch.period, branch.system
     rtol, atol, tol = polish["rtol"], polish["atol"], polish["tol"]
     mask = np.arange(system.n_state) != SECTION_INDEX
@@ -333,6 +335,9 @@ def _switch_crossing(branch: Branch, bif: Bifurcation, deltas, fd_step: float, p
         tried.append(delta)
         for sign in (1.0, -1.0):
             x_pred = x_bp + sign * delta * phi
+            ok, G, _, _ = evaluate(x_pred)
+            if not ok or np.max(np.abs(G)) <= FLAT * tol:  # too close: G is quadratic there
+                continue
             ok, x, _, _ = _correct(evaluate, x_pred, phi, x_pred, tol, 8)
             if not ok or np.linalg.norm(x - x_pred) > 0.5 * delta:
                 continue
