@@ -213,5 +213,11 @@ def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
     assert 5e-5 < gap < 2e-4  # measured 1.0e-4
     # and it is a fixed point of the map at its eta to the corrector's tolerance
     assert orbit.residual < 1e-9
+    # the normal form of a pitchfork: the side branch lies on the side where the anti-phase
+    # orbit is stable (above the point) and is unstable there (subcritical), 1 + O(eta - bp)
+    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), max_points=6, stick_events=False)
+    assert np.all(side.values > bp.value) and not np.any(side.stable)
+    lead = np.abs(side.multipliers[:, 0])
+    assert np.all(np.diff(lead) > 0) and lead[0] < 1.01  # measured 1.0008 .. 1.0163
     with pytest.raises(ValueError, match="branch point"):
         ssf.switch_branch(branch, ssf.Bifurcation("fold", bp.value, bp.index, bp.point))
