@@ -131,8 +131,9 @@ def pseudo_arclength(
     branch_points: bool = False,
     noise_gap: float = 0.0,
 ):
-    walk = _Walk.start(evaluate, x0, direction, tol, ds, ds_min, refine, tests,
-                       spectrum or _sorted_eigs, orient, branch_points, noise_gap)  # fmt: skip
+    walk = _Walk.start(evaluate, x0, direction, tol, ds, ds_min, refine,
+                       _test_function(tests, branch_points), spectrum or _sorted_eigs, orient,
+                       noise_gap)  # fmt: skip
     stall_ds = ds_min if stall_ds_min is None else stall_ds_min
     lo, hi = bounds
     status = "max-points"
@@ -241,6 +242,18 @@ def _stalled(xs: list[np.ndarray], ds_min_given: float) -> bool:
     return bool(np.linalg.norm(np.diff(last, axis=0), axis=1).sum() < ds_min_given)
 
 
+def _test_function(tests, branch_points: bool):
+    """(A, DG, t) -> the test values: ``tests(A, t)``, and the branch-point test."""
+
+    def test_fn(A, DG, t):
+        out = tests(A, t)
+        if branch_points:
+            out[BRANCH_POINT] = branch_point_test(DG, t)
+        return out
+
+    return test_fn
+
+
 @dataclass
 class _Walk:
     """A branch being followed: its points, multipliers, test values and bifurcations so
@@ -263,8 +276,8 @@ class _Walk:
     noise_gap: float = 0.0
 
     @classmethod
-    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, tests, spectrum,
-              orient=None, branch_points=False, noise_gap=0.0) -> _Walk:  # fmt: skip
+    def start(cls, evaluate, x0, direction, tol, ds, ds_min, refine, test_fn, spectrum,
+              orient=None, noise_gap=0.0) -> _Walk:  # fmt: skip
         """The walk at x0, its tangent oriented by ``direction`` in lambda (or by ``orient``)."""
         ok, G, DG, A = evaluate(x0)
         if not ok:
@@ -274,13 +287,6 @@ class _Walk:
         if orient is not None:
             guess = np.asarray(orient, dtype=float)
         t = _tangent(DG, guess)
-
-        def test_fn(A, DG, t):
-            out = tests(A, t)
-            if branch_points:
-                out[BRANCH_POINT] = branch_point_test(DG, t)
-            return out
-
         walk = cls(evaluate, tol, ds, ds_min, list(refine), test_fn, spectrum, t, [x0.copy()],
                    noise_gap=noise_gap)  # fmt: skip
         walk.mults.append(spectrum(A))
