@@ -215,9 +215,16 @@ def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
     assert orbit.residual < 1e-9
     # the normal form of a pitchfork: the side branch lies on the side where the anti-phase
     # orbit is stable (above the point) and is unstable there (subcritical), 1 + O(eta - bp)
-    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), max_points=6, stick_events=False)
+    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), stick_events=False)
+    assert side.status == "bounds" and side.values[-1] == 1.8
     assert np.all(side.values > bp.value) and not np.any(side.stable)
     lead = np.abs(side.multipliers[:, 0])
-    assert np.all(np.diff(lead) > 0) and lead[0] < 1.01  # measured 1.0008 .. 1.0163
+    assert lead[0] < 1.01  # measured 1.0008
+    # unstable all the way to the bound, where it ends on this sheet: the branch turns at
+    # a fold at eta = 1.951 and comes back stable 8.5e-4 away (in x2 - x1), and ending
+    # on the bound with eta fixed from the full step's predictor once landed there
+    # (multiplier 0.63, and a spurious branch point at 1.79392 between the two sheets)
+    assert np.all(np.diff(lead) > 0) and not side.bifurcations
+    assert abs(lead[-1] - 1.4496) < 2e-3  # a walk with steps of 0.004 passes 1.4474, 1.4552
     with pytest.raises(ValueError, match="branch point"):
         ssf.switch_branch(branch, ssf.Bifurcation("fold", bp.value, bp.index, bp.point))

@@ -342,9 +342,13 @@ def _switch_crossing(branch: Branch, bif: Bifurcation, deltas, fd_step: float, p
             if not ok or np.linalg.norm(x - x_pred) > 0.5 * delta:
                 continue
             last = find_orbit(system_at(x[-1]), full(x), p, **polish)
-            # still off the old branch (Newton at fixed lambda could have fallen back on it)
+            # still off the old branch (Newton at fixed lambda could have fallen back on it),
+            # and not the old branch's own orbit at this lambda (found from the point)
             off = abs(phi @ (np.r_[last.points[0][mask], x[-1]] - x_bp))
-            if last.converged and off > 0.5 * delta:
+            if not last.converged or off <= 0.5 * delta:
+                continue
+            old = find_orbit(last.system, z, p, **polish)
+            if not old.converged or np.max(np.abs(old.points[0] - last.points[0])) > 0.5 * delta:
                 return last
     offsets = ", ".join(f"{d:g}" for d in tried)
     return _not_found(last, system_at(lam), z, p, tol, rtol, atol,
