@@ -56,8 +56,11 @@ def branch():
         warnings.simplefilter("ignore", RuntimeWarning)
         orbit = ssf.find_orbit(_system(ETA_START), Z_START, period=2)
         assert orbit.converged and orbit.stable and orbit.residual < 1e-10
+        # the lower bound 1.5e-5 past the point, so that the step before it is an interior
+        # one (5.0205717; an orbit branch ends on a bound by a step along the tangent, and
+        # with the bound at 5.02055 it got there from 5.0206302 directly)
         return ssf.continue_orbit(
-            orbit, "eta", (5.02055, 5.02071), direction=-1, max_points=20, stick_events=False
+            orbit, "eta", (5.02054, 5.02071), direction=-1, max_points=20, stick_events=False
         )
 
 
@@ -72,9 +75,10 @@ def test_the_period_2_orbit_loses_stability_at_a_neimark_sacker_point(branch):
         pair = mu[np.abs(mu.imag) > 0.02]  # the one complex pair
         assert pair.size == 2 and pair[0] == np.conj(pair[1])
         assert 176.5 < abs(np.degrees(np.angle(pair[0]))) < 178.5
-    # |pair| 0.80234 -> 1.34274; the real multiplier 0.79 -> 0.81 stays inside
+    # |pair| 0.80234 -> 1.34 (at 5.02055; the branch's end is now 5.02054); the real
+    # multiplier 0.79 -> 0.8175 stays inside
     assert np.max(np.abs(stable_side)) < 0.81 and np.max(np.abs(unstable_side)) > 1.3
-    assert np.sort(np.abs(unstable_side))[-3] < 0.81
+    assert np.sort(np.abs(unstable_side))[-3] < 0.82
 
 
 def test_the_multipliers_on_both_sides_match_finite_differences(branch):

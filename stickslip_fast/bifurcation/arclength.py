@@ -37,8 +37,8 @@ direction : float
     +1 to start towards increasing lambda, -1 towards decreasing.
 bounds : (float, float)
     The branch ends on the first of them it reaches: a step that would
-    leave [lo, hi] ends on the bound instead: a step to it along the tangent,
-    then corrected with lambda fixed there.
+    leave [lo, hi] ends on the bound instead, corrected with lambda fixed there
+    (with ``branch_points``, after a step to it along the tangent).
 ds, ds_min, ds_max : float
     First, smallest and largest arclength step. The step grows by 1.5
     after a corrector that needed <= 3 iterations, halves after a failure.
@@ -73,7 +73,12 @@ stall_ds_min : float, optional
 branch_points : bool
     Also mark branch points (kind "branch-point": the sign of det [DG; tᵀ],
     :func:`.detection.branch_point_test`; a fold located in the same step as a
-    branch point is the branch point: a pitchfork's side branch turns there).
+    branch point is the branch point: a pitchfork's side branch turns there). Such
+    a walk also ends on a bound by a step along the tangent first: corrected with
+    lambda fixed from the full step's predictor, a branch near a fold could land on
+    its other sheet, and the test would read a branch point between them. (Curves
+    keep the fixed-lambda correction: their ends are checked against one-parameter
+    folds to 1e-6, and the tangent step moved one by 1.6e-6.)
 noise_gap : float
     Read no fold and no branch point from a step with an end where DG's smallest
     singular value is below ``noise_gap`` times its largest
@@ -142,7 +147,8 @@ def pseudo_arclength(
         while len(walk.xs) < max_points:
             x = walk.xs[-1]
             trial, walk.ds = _try_steps(walk.evaluate, x, walk.t, walk.ds, walk.ds_min,
-                                        (lo, hi), walk.tol, max_corrector, jump)  # fmt: skip
+                                        (lo, hi), walk.tol, max_corrector, jump,
+                                        branch_points)  # fmt: skip
             if not trial.accepted:
                 # a step that jumped off the branch ends it; a sharp end may go on, tighter
                 if not trial.jumped and walk.next_stage(max_corrector):
@@ -197,16 +203,18 @@ def _try_steps(
     tol: float,
     max_corrector: int,
     jump: Callable[[np.ndarray, np.ndarray], bool] | None,
+    along_tangent: bool = False,
 ) -> tuple[_Trial, float]:
     """Predict from x along t and correct, halving ds until a step is accepted or ds <
-    ds_min; returns the :class:`_Trial` and the step size reached."""
+    ds_min; returns the :class:`_Trial` and the step size reached. ``along_tangent``: a
+    step that leaves the bounds ends on them along the tangent (:func:`_end_on_bound`)."""
     lo, hi = bounds
     trial = _Trial()
     while ds >= ds_min:
         x_pred = x + ds * t
         if not lo <= x_pred[-1] <= hi:
             okc, x_new, data, its = _end_on_bound(evaluate, x, t, ds, (lo, hi), tol,
-                                                  max_corrector)  # fmt: skip
+                                                  max_corrector, along_tangent)  # fmt: skip
             if okc and not (jump is not None and jump(x, x_new)):
                 trial.accepted = trial.on_bound = True
                 trial.x_new, trial.data, trial.its = x_new, data, its
@@ -228,27 +236,30 @@ def _try_steps(
     return trial, ds
 
 
-def _end_on_bound(evaluate, x, t, ds, bounds, tol, max_corrector):
+def _end_on_bound(evaluate, x, t, ds, bounds, tol, max_corrector, along_tangent):
     """The branch's point on the bound that the step of size ``ds`` from x along t crosses.
 
-    First a plain step to the bound (the predictor x + ds_b t on it, corrected normal to
-    t), then that point corrected with lambda fixed at the bound. Corrected with lambda
-    fixed from the full step's predictor, a branch near a fold could land on its other
-    sheet (measured: the crossing branch at the anti-phase orbit's first branch point,
-    ended at eta = 1.8, landed on its stable sheet 8.5e-4 away, and the tests read a
-    spurious branch point). Returns :func:`_correct`'s (converged, x, data, iterations)."""
+    Corrected with lambda fixed at the bound, from the full step's predictor or, with
+    ``along_tangent``, from a plain step to the bound (the predictor x + ds_b t on it,
+    corrected normal to t). From the full step's predictor a branch near a fold could
+    land on its other sheet (measured: the crossing branch at the anti-phase orbit's
+    first branch point, ended at eta = 1.8, landed on its stable sheet 8.5e-4 away, and
+    the branch-point test read a spurious point between the two). Returns
+    :func:`_correct`'s (converged, x, data, iterations)."""
     lo, hi = bounds
-    bound = hi if x[-1] + ds * t[-1] > hi else lo
-    ds_b = (bound - x[-1]) / t[-1]  # in (0, ds]: the full step crosses the bound
-    x_b = x + ds_b * t
-    x_b[-1] = bound
-    okc, x_near, data, its = _correct(evaluate, x_b, t, x_b, tol, max_corrector)
-    if not okc or np.linalg.norm(x_near - x_b) > 0.5 * ds_b:  # as for any step
-        return False, x_near, data, its
-    x_near[-1] = bound
+    start = x + ds * t
+    bound = hi if start[-1] > hi else lo
+    if along_tangent:
+        ds_b = (bound - x[-1]) / t[-1]  # in (0, ds]: the full step crosses the bound
+        x_b = x + ds_b * t
+        x_b[-1] = bound
+        okc, start, data, its = _correct(evaluate, x_b, t, x_b, tol, max_corrector)
+        if not okc or np.linalg.norm(start - x_b) > 0.5 * ds_b:  # as for any step
+            return False, start, data, its
+    start[-1] = bound
     e_lam = np.zeros_like(x)
     e_lam[-1] = 1.0
-    return _correct(evaluate, x_near, e_lam, x_near, tol, max_corrector)
+    return _correct(evaluate, start, e_lam, start, tol, max_corrector)
 
 
 def _stalled(xs: list[np.ndarray], ds_min_given: float) -> bool:
