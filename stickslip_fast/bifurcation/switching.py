@@ -92,7 +92,7 @@ def period_doubling_start(
 
 
 #: :func:`switch_branch`'s docstring (kept out of the body: the layout rule counts lines).
-_SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking or branch point of an orbit branch.
+_SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking or branch point of a branch.
 
     At a period-doubling, the period-doubled orbit; at a symmetry-breaking point of
     a branch of in-phase orbits (docs/orbits.md, "In-phase orbits"), one of the two
@@ -117,7 +117,9 @@ _SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking o
         resolve (the predictor's residual below 10 ``tol``: the normal form is
         cubic) is skipped. The difference between the disks grows like
         sqrt(abs(lambda - lambda_SB)): at the defaults 1e-6 wins, 0.002-0.004 in eta
-        from the point on the paper's sets.
+        from the point on the paper's sets. At a branch point too they are tried
+        smallest first (each on both sides), skipping those too small to resolve
+        (G is quadratic there); on the anti-phase branch of two disks 1e-4 wins.
     tol, rtol, atol, fd_step
         As for :func:`continue_orbit`.
     shooting : {"single", "multiple", "auto"}
