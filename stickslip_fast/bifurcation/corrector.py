@@ -12,6 +12,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .detection import BRANCH_POINT
+
 # evaluate(x) -> (ok, G (m,), DG (m, m + 1), A (m, m)): residual, its Jacobian in (z, lambda),
 # and the map's Jacobian in z (whose eigenvalues are the multipliers)
 Evaluator = Callable[[np.ndarray], tuple[bool, np.ndarray, np.ndarray, np.ndarray]]
@@ -109,18 +111,21 @@ def _locate(evaluate, xa, xb, kind, fa, fb, t_a, tol, locate_tol, test_fn):
     side = 0
     x_best = None
     lam_prev = math.inf
-    retries = 3 if kind == "branch-point" else 0
+    retries = 3 if kind == BRANCH_POINT else 0
+
+    def trial(sig):  # the chord's point at sig, corrected onto the branch
+        anchor = xa + sig * chord
+        return _correct(evaluate, anchor, normal, anchor, tol, 8)
+
     for _ in range(60):
         sig = (a * fb - b * fa) / (fb - fa)
         if not a < sig < b:
             sig = 0.5 * (a + b)
-        anchor = xa + sig * chord
-        okc, x, data, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
+        okc, x, data, _ = trial(sig)
         while not okc and retries and sig != 0.5 * (a + b):
             retries -= 1
             sig = 0.5 * (a + b)
-            anchor = xa + sig * chord
-            okc, x, data, _ = _correct(evaluate, anchor, normal, anchor, tol, 8)
+            okc, x, data, _ = trial(sig)
         if not okc:
             return x_best
         _, DG, A = data
