@@ -15,6 +15,10 @@ once more on the cache it filled:
   converged ``simulate`` at eta = 2, ``find_orbit`` and ``continue_orbit`` in eta
   to 3.3, each timed apart in the child (most of it is the variational kernel's
   compile, which the two orbit calls share since 2026-11-28).
+- ``dask_warm_up``: what a fresh Dask worker pays before its first task,
+  ``backends.dask.warm_up`` (a restart chunk of one value and a continuation
+  chunk), with the number of ``run_lane`` specialisations it compiled (two until
+  2026-11-29: the one-value chunk's start was a read-only view).
 - ``readme_main_job``: the README's first command,
   ``stickslip-fast sweep data/fig06_asymmetric_constant.toml -o out.h5`` (the Fig. 6
   diagram, 1000 values, all cores), as ``python -m stickslip_fast.cli``.
@@ -111,6 +115,16 @@ _ORBITS = textwrap.dedent(
 )
 
 
+_DASK_WARM_UP = textwrap.dedent(
+    """
+    import json
+    from stickslip_fast.backends.dask import warm_up
+    rec = warm_up()
+    print(json.dumps(dict(warm_up_s=round(rec["seconds"], 2), **rec["overloads"])))
+    """
+)
+
+
 def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
     """One fresh process: its wall time and CPU time (user + system of the child)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(root))
@@ -120,6 +134,8 @@ def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
         cmd = [sys.executable, "-c", _DRIVER_FLOOR]
     elif job == "readme_orbits":
         cmd = [sys.executable, "-c", _ORBITS]
+    elif job == "dask_warm_up":
+        cmd = [sys.executable, "-c", _DASK_WARM_UP]
     else:
         config = str(root / "data" / "fig06_asymmetric_constant.toml")
         out = os.path.join(workdir, "fig06.h5")
@@ -135,7 +151,7 @@ def _child(root: Path, cache: str, job: str, workdir: str) -> dict:
         raise RuntimeError(f"{job} failed in {root}:\n{proc.stderr[-3000:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     rec = dict(wall_s=round(wall, 2), cpu_s=round(cpu, 2))
-    if job in ("driver_floor", "readme_orbits"):  # the child's own split of its time
+    if job in ("driver_floor", "readme_orbits", "dask_warm_up"):  # the child's own report
         rec.update(json.loads(proc.stdout.strip().splitlines()[-1]))
     return rec
 
@@ -148,7 +164,7 @@ def _summary(runs: list[dict]) -> dict:
     )
 
 
-JOBS = ("first_simulate", "driver_floor", "readme_orbits", "readme_main_job")
+JOBS = ("first_simulate", "driver_floor", "readme_orbits", "readme_main_job", "dask_warm_up")
 
 
 def run(roots=(ROOT,), repeats: int = 3, log=print, jobs=JOBS) -> dict:

@@ -63,8 +63,12 @@ TCONV_RTOL = 1e-2
 ASYM = ssf.System.preset("asymmetric")
 
 
-def _agree(gpu, cpu):
-    """Status and period identical; points within POINT_TOL, NaN in the same places."""
+def _agree(gpu, cpu, ended_at_t_end=True):
+    """Status and period identical; points within POINT_TOL, NaN in the same places.
+
+    ``ended_at_t_end=False``: the runs went past t_end by design (stoprules.past_end), so
+    their end time follows the step sequence and only NaN-ness of final_state is compared.
+    """
     np.testing.assert_array_equal(gpu.status, cpu.status)
     np.testing.assert_array_equal(gpu.period, cpu.period)
     np.testing.assert_array_equal(gpu.count, cpu.count)
@@ -86,6 +90,7 @@ def _agree(gpu, cpu):
     a, b = gpu.final_state, cpu.final_state
     np.testing.assert_array_equal(np.isnan(a), np.isnan(b), err_msg="final_state")
     at_end = np.isin(cpu.status, ["ok", "equilibrium", "stalled", "no-crossings"])
+    at_end &= ended_at_t_end
     t_conv = getattr(cpu, "t_converged", None)
     if t_conv is not None:
         at_end &= np.isnan(t_conv)
@@ -175,7 +180,9 @@ def test_a_window_that_ends_undecided_looks_past_its_end_as_on_the_cpu():
         kw.update(max_points=16, progress=False)
         gpu = sweep(system, "eta", [system.eta], backend="cuda", **kw)
         cpu = sweep(system, "eta", [system.eta], backend="local", **kw)
-        _agree(gpu, cpu)
+        # Each run ends past t_end, where the step sequence puts it: on an H200 the first
+        # one's final state differed by 6e-5 (FMA roundings), its points by <= 1e-9.
+        _agree(gpu, cpu, ended_at_t_end=False)
         assert (cpu.status[0], cpu.period[0]) == expected
 
 

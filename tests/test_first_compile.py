@@ -135,3 +135,37 @@ def test_compile_jobs_and_bad_arguments():
                      (dict(jobs=0), "jobs")):  # fmt: skip
         with pytest.raises(ValueError, match=name):
             precompile(**kw)
+
+
+def test_sweep_chunks_of_any_size_and_input_share_one_compiled_entry(monkeypatch):
+    # Numba types an array by layout and read-only flag. A chunk of one value broadcast
+    # its start to a read-only view, so run_lane compiled twice (~5 s each, cold): a
+    # one-value sweep or tail chunk, the Dask warm-up. Every chunk, read-only input
+    # too, must reach the entry with the same argument types.
+    import numba
+    import numpy as np
+
+    from stickslip_fast.backends.local import compute_continuation_chunk, compute_restart_chunk
+    from stickslip_fast.core import sweep_kernels
+    from stickslip_fast.core.settings import Settings
+    from stickslip_fast.core.trajectory import SWEEP_INT_FIELDS
+
+    seen = []
+
+    def record(*args):  # the entry's types, then the lane's values marked as run
+        seen.append(tuple(str(numba.typeof(a)) for a in args))
+        args[14][:, SWEEP_INT_FIELDS.index("status")] = 0
+
+    monkeypatch.setattr(sweep_kernels, "run_lane", record)
+    system = stickslip_fast.System.preset("asymmetric")
+    settings = Settings.resolve("rodas5p", 1.0, 0.0, max_points=2)
+    y0 = system.initial_state(None)
+    frozen = np.array([[2.0], [3.0], [4.0]])
+    frozen.flags.writeable = False
+    for values in (np.array([[2.0]]), np.array([[2.0], [3.0]]), frozen):
+        compute_restart_chunk(system, ("eta",), values, y0, settings)
+    starts = np.broadcast_to(y0, (3, y0.size))  # read-only, one start per value
+    compute_restart_chunk(system, ("eta",), frozen, starts, settings)
+    compute_continuation_chunk(system, ("eta",), frozen[None], y0[None, :], y0, settings)
+    assert len(seen) >= 5
+    assert len(set(seen)) == 1, sorted(set(seen))

@@ -204,17 +204,28 @@ def sweep_chunk(
     # values: lanes = the thread count. Results do not depend on it.
     lanes = max(1, min(nv, int(lanes)))
     # np.int64(...), not Python ints: the compiled entry is typed once
-    args = (np.int64(method), np.int64(0), np.int64(0), y0s, np.ascontiguousarray(params),
+    args = (np.int64(method), np.int64(0), np.int64(0), y0s, _owned(params),
             n_osc, dc, variant, rs, max_points)  # fmt: skip
     _run_lanes(lanes, lanes, args, outputs, abort)
     return outputs
 
 
+def _owned(a: np.ndarray) -> np.ndarray:
+    """A writable C-contiguous float copy: the compiled entry is typed once.
+
+    Numba types an array by its layout and its read-only flag, so a read-only view
+    (``np.broadcast_to`` of one start, read-only input) compiled :func:`run_lane` a
+    second time: ~5 s on a cold cache (a one-value sweep, a chunk of one value, the
+    Dask warm-up).
+    """
+    return np.array(a, dtype=np.float64, order="C", copy=True)
+
+
 def _starts(y0: np.ndarray, nv: int) -> np.ndarray:
-    """One start per value: broadcast a single (n_state,) start."""
+    """One start per value: a single (n_state,) start repeated."""
     if y0.ndim == 2:
-        return np.ascontiguousarray(y0.reshape(-1, y0.shape[-1]))
-    return np.ascontiguousarray(np.broadcast_to(y0.reshape(-1), (nv, y0.shape[-1])))
+        return _owned(y0.reshape(-1, y0.shape[-1]))
+    return _owned(np.broadcast_to(y0.reshape(-1), (nv, y0.shape[-1])))
 
 
 def continuation_chunk(
@@ -241,7 +252,7 @@ def continuation_chunk(
     """
     nc, nl = params.shape[0], params.shape[1]
     n = y_starts.shape[1]
-    flat = np.ascontiguousarray(params.reshape(nc * nl, params.shape[2]))
+    flat = _owned(params.reshape(nc * nl, params.shape[2]))
     outputs = _outputs(nc * nl, max_points, n)
     starts = np.empty((nc * nl, n))
     starts[::nl] = y_starts  # only each chain's first row is read
