@@ -13,8 +13,13 @@ import numpy as np
 import pytest
 
 import stickslip_fast as ssf
-from stickslip_fast.bifurcation.arclength import pseudo_arclength
-from stickslip_fast.bifurcation.detection import RANK_GAP_MIN, branch_point_test, rank_gap
+from stickslip_fast.bifurcation.arclength import STALL_WINDOW, pseudo_arclength
+from stickslip_fast.bifurcation.detection import (
+    RANK_GAP_MIN,
+    branch_point_test,
+    rank_gap,
+    singular_gaps,
+)
 
 KW = dict(ds=0.05, ds_min=1e-6, ds_max=0.1, max_points=200, tol=1e-12, branch_points=True)
 
@@ -127,9 +132,37 @@ def test_no_fold_is_read_from_a_tangent_that_is_noise():
     xs, _, bifs, status = pseudo_arclength(nearly_neutral(1e-9), start, -1.0, (-1.0, 1.5), **kw)
     assert xs[:, 0].min() < 0 < xs[:, 0].max()  # the walk passed the turn, unlabelled
     assert bifs == []
+    # and, the gap below the noise at STALL_WINDOW points in a row (here every point:
+    # the solutions form a surface within tol / eps), it stops and says why
+    assert status == "degenerate" and len(xs) == STALL_WINDOW
     # with the rule off (the default of pseudo_arclength) the same turn is read as a fold
     _, _, bifs, _ = pseudo_arclength(nearly_neutral(1e-9), start, -1.0, (-1.0, 1.5), **KW)
     assert kinds(bifs) == ["fold"]
+
+
+def test_one_huge_multiplier_is_not_a_degenerate_family():
+    # past a sharp fold one multiplier grows to 1e6 and more: DG's largest singular value
+    # with it, so the rank gap falls below RANK_GAP_MIN (6e-8 measured on Fig. 12's period-2
+    # branch) although DG has no second null direction. Here G = (K (z1 - lam), z2 - z1,
+    # z3 - z2) with K = 1e8: a straight branch, rank gap ~1e-8, the smallest singular value
+    # against the next ~0.4: the walk must go on to its bound, not end "degenerate"
+    K = 1e8
+
+    def stiff(x):
+        z1, z2, z3, lam = x
+        G = np.array([K * (z1 - lam), z2 - z1, z3 - z2])
+        DG = np.array([[K, 0.0, 0.0, -K], [-1.0, 1.0, 0.0, 0.0], [0.0, -1.0, 1.0, 0.0]])
+        return True, G, DG, DG[:, :3] + np.eye(3)
+
+    _, _, DG, _ = stiff(np.zeros(4))
+    first, second = singular_gaps(DG)
+    s = np.linalg.svd(DG, compute_uv=False)
+    assert first == pytest.approx(s[-1] / s[0]) and first < 1e-8 < RANK_GAP_MIN
+    assert second == pytest.approx(s[-1] / s[-2]) and second > 0.1
+    kw = dict(KW, tol=1e-6, noise_gap=RANK_GAP_MIN)
+    xs, _, bifs, status = pseudo_arclength(stiff, np.zeros(4), 1.0, (-1.0, 1.0), **kw)
+    assert status == "bounds" and xs[-1, -1] == pytest.approx(1.0) and len(xs) > STALL_WINDOW
+    assert bifs == []
 
 
 # --------------------------------------------------------------- on the engine
@@ -188,8 +221,12 @@ def test_no_folds_are_read_where_a_disk_is_nearly_undamped(monkeypatch):
                         0.00979440927478325])  # fmt: skip
     kw = dict(direction=-1, max_points=100, stick_events=False)
     branch = ssf.continue_orbit(start, "eta", (1.0, 1.2), **kw)
-    assert branch.status == "max-points" and branch.bifurcations == []
-    assert 1.024 < branch.values[-20:].min() and branch.values[-20:].max() < 1.0242
+    # it ends there, "degenerate", after STALL_WINDOW points with the gap below the noise
+    # (measured: 15 points, the last five at eta = 1.024101-1.024222; before the rule it
+    # walked on to max_points along the family, eta wiggling within 1.5e-4)
+    assert branch.status == "degenerate" and branch.bifurcations == []
+    assert STALL_WINDOW <= len(branch.values) < 30
+    assert 1.024 < branch.values[-5:].min() and branch.values[-5:].max() < 1.0243
     # the same walk reading its tangent everywhere reports folds there (13 measured
     # with 200 points), none of them the system's
     monkeypatch.setattr("stickslip_fast.bifurcation.orbit_record.RANK_GAP_MIN", 0.0)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .corrector import NOISE_FLOOR, Evaluator, _correct, _locate, _tangent
-from .detection import BRANCH_POINT, _sorted_eigs, _tests, branch_point_test, rank_gap
+from .detection import BRANCH_POINT, _sorted_eigs, _tests, branch_point_test, singular_gaps
 from .progress import walk_reporter
 
 #: A branch ends with status "precision-limit" where its last this many steps together
@@ -84,7 +84,10 @@ noise_gap : float
     singular value is below ``noise_gap`` times its largest
     (:func:`.detection.rank_gap`): DG has a second null direction to within its
     noise there, and the tangent is noise (orbits: :data:`.detection.RANK_GAP_MIN`;
-    default 0, off).
+    default 0, off). Where DG's smallest singular value is also below ``noise_gap``
+    times the next one (:func:`.detection.singular_gaps`: not merely small against
+    one huge multiplier) at :data:`STALL_WINDOW` points in a row, the branch ends
+    with status "degenerate".
 stop : callable, optional
     (x, A, walk) -> True ends the branch after accepting x (its map's Jacobian
     A) with status "stopped" (for a change of coordinates; ``walk`` holds the
@@ -110,7 +113,11 @@ xs, mults, bifs, status
     "precision-limit"
     (with ``refine``: the last :data:`STALL_WINDOW` steps together advanced
     less than ``ds_min``; or the last corrector stopped at the residual's
-    round-off floor, :func:`_correct`, with no stage left).
+    round-off floor, :func:`_correct`, with no stage left) or "degenerate"
+    (with ``noise_gap``: at each of the last :data:`STALL_WINDOW` points DG's
+    smallest singular value was below ``noise_gap`` times the next one, so the
+    solutions form a surface there, not a curve, within the noise, and the
+    tangent is noise).
 """
 
 
@@ -162,6 +169,9 @@ def pseudo_arclength(
                 report(trial.x_new)
             if trial.on_bound:
                 status = "bounds"
+                break
+            if walk.degenerate():
+                status = "degenerate"
                 break
             if _stalled(walk.xs, stall_ds):  # the ds_min given: the stages lower walk.ds_min
                 status = "precision-limit"
@@ -303,7 +313,9 @@ class _Walk:
     mults: list[np.ndarray] = field(default_factory=list)
     tests: list[dict[str, float]] = field(default_factory=list)
     bifs: list[tuple[str, float, int, np.ndarray]] = field(default_factory=list)
-    gaps: list[float] = field(default_factory=list)  # rank_gap(DG) per point (noise_gap)
+    # per point (with noise_gap), detection.singular_gaps(DG): the rank gap, and the
+    # smallest singular value against the next
+    gaps: list[tuple[float, float]] = field(default_factory=list)
     noise_gap: float = 0.0
 
     @classmethod
@@ -325,9 +337,15 @@ class _Walk:
         walk.gaps.append(walk.gap(DG))
         return walk
 
-    def gap(self, DG: np.ndarray) -> float:
-        """:func:`.detection.rank_gap` of DG (inf where ``noise_gap`` is off)."""
-        return rank_gap(DG) if self.noise_gap > 0 else math.inf
+    def gap(self, DG: np.ndarray) -> tuple[float, float]:
+        """:func:`.detection.singular_gaps` of DG (inf where ``noise_gap`` is off)."""
+        return singular_gaps(DG) if self.noise_gap > 0 else (math.inf, math.inf)
+
+    def degenerate(self) -> bool:
+        """The last :data:`STALL_WINDOW` points all had a second null direction of DG
+        within its noise (``noise_gap``): which way the walk goes is noise there."""
+        last = [g[1] for g in self.gaps[-STALL_WINDOW:]]
+        return self.noise_gap > 0 and len(last) == STALL_WINDOW and max(last) < self.noise_gap
 
     def accept(self, x: np.ndarray, x_new: np.ndarray, data, locate_tol: float) -> None:
         """Append x_new (corrected, with ``data`` = (G, DG, A)), locating the bifurcations
@@ -344,7 +362,7 @@ class _Walk:
         if BRANCH_POINT in changed:  # a pitchfork's side branch turns at the branch point
             changed.discard("fold")
         gap = self.gap(DG)
-        if min(gap, self.gaps[-1]) < self.noise_gap:  # a second null direction: t is noise
+        if min(gap[0], self.gaps[-1][0]) < self.noise_gap:  # a second null direction: t is noise
             changed -= {"fold", BRANCH_POINT}
         for kind, prev in self.tests[-1].items():
             cur = te[kind]

@@ -84,7 +84,10 @@ class Branch:
         "nonsmooth" (a section grazing, recorded in ``bifurcations``) or
         "precision-limit" (past a sharp end, in the tighter stages of
         ``sharp_ends``: the steps crawl because Newton's reach has shrunk to
-        the integration's precision).
+        the integration's precision) or "degenerate" (orbits: at each of the
+        last 10 points the shooting Jacobian had a second null direction
+        within its noise, as where a nearly undamped disk makes a family of
+        orbits at one parameter value; which way the branch goes is noise there).
     stick_count : ndarray of int, shape (k,), optional
         Stick phases per period at each point (all disks together; -1 where not
         computed). None for equilibria.

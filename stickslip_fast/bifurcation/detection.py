@@ -84,5 +84,21 @@ def rank_gap(DG: np.ndarray) -> float:
 
     Zero where DG has a second null direction besides the tangent (at a branch point,
     or all along a family of solutions at one parameter value); small near them."""
+    return singular_gaps(DG)[0]
+
+
+def singular_gaps(DG: np.ndarray) -> tuple[float, float]:
+    """(sigma_m / sigma_1, sigma_m / sigma_(m-1)) of DG (m x (m + 1)), from one SVD.
+
+    The first is :func:`rank_gap`. The second measures the smallest singular value
+    against the rest of the spectrum, not against the largest alone: past a sharp fold
+    one multiplier of 1e6 makes sigma_1 huge and the first gap small (6e-8 on Fig. 12's
+    period-2 branch) while sigma_m stays 0.1-0.35, no second null direction; along a
+    family of solutions at one parameter value both are small (1e-8 where a disk is
+    nearly undamped). For m = 1 both are the first.
+    """
     s = np.linalg.svd(DG, compute_uv=False)
-    return float(s[-1] / s[0]) if s[0] > 0 else 0.0
+    if s[0] <= 0:
+        return 0.0, 0.0
+    below = s[-2] if s.size > 1 else s[0]
+    return float(s[-1] / s[0]), float(s[-1] / below) if below > 0 else 0.0
