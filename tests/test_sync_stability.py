@@ -281,3 +281,25 @@ def test_in_phase_and_anti_phase_motion_coexist_at_eta_3():
     assert r.labels[4, 5] == in_phase[0].id  # disk 2 started 0.025 faster: back in phase
     assert r.labels[6, 6] == apart[0].id  # the paper's start (0.05, 0.05)
     assert 0.02 < in_phase[0].fraction < 0.15  # measured 0.049 (0.070 on 25 x 25 cells)
+
+
+def test_multiple_shooting_says_that_it_marks_no_symmetry_breaking_points():
+    # the SB test runs on single shooting only: a stretch of an in-phase branch followed by
+    # multiple shooting says so, instead of leaving its SB points unlabelled in silence
+    orbit = _in_phase_orbit(_sym(2, 3.0))
+    with pytest.warns(UserWarning, match="marks no symmetry-breaking") as seen:
+        branch = ssf.continue_orbit(orbit, "eta", (3.0, 3.2), shooting="multiple", max_points=4)
+    assert "eta = 3.0" in str(seen[0].message)
+    assert branch.values.size >= 2 and branch.bifurcations == []
+    for p in branch.points:  # still in phase: the warning is about labels, not the orbits
+        assert synchronous_point(orbit.system, p, 1e-7)
+    # the same two disks apart (the anti-phase orbit of tests/test_branch_points.py) are
+    # not in phase: nothing to warn about
+    apart = ssf.find_orbit(_sym(2, 1.1275682582876292), np.array([
+        0.03734505165096868, 0.0, 0.0, 0.0, 0.060820214617317424, 0.0009027951066187418,
+        0.0, 0.0, 0.00979440927478325]))  # fmt: skip
+    assert apart.converged and not synchronous_point(apart.system, apart.points[0])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ssf.continue_orbit(apart, "eta", (1.1, 1.2), shooting="multiple", max_points=4)
+    assert not [w for w in caught if "symmetry-breaking" in str(w.message)]

@@ -28,6 +28,7 @@ from .multishoot_orbit import initial_segments, newton_multiple
 from .orbit_record import branch_point_marks, multipliers_stable
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
+from .synchrony import warn_symmetry_breaking_unmarked
 from .walk_args import WalkSettings
 
 
@@ -161,6 +162,7 @@ def continue_multiple(system0, param, period, x0, direction, bounds, walk: WalkS
         bifs.extend((b, v, i + off, pc.ms.unpack(x[:-1])[0][0]) for b, v, i, x in pc.bifs)
     bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
     mults = np.array(mults)
+    warn_symmetry_breaking_unmarked(system0, pts[0], param, vals[0])
     return Branch(
         system=system0, param=param, period=period, values=np.array(vals),
         points=np.array(pts), T=np.array(Ts), multipliers=mults,

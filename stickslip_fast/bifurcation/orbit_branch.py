@@ -157,12 +157,12 @@ sharp_ends : bool
     from there on; ``T`` and the points are those of the stage that
     computed them.
 shooting : {"single", "multiple", "auto"}
-    "single": fixed points of the return map. "multiple": the orbit as
-    ``segments`` segments (:mod:`.multishoot`; the arclength then measures
-    all segment starts and T, so ``ds`` means a longer step in the orbit
-    than with single shooting). "auto": single, and where it ends with
-    "step-too-small" or "precision-limit", multiple shooting from its last
-    point on (same direction in the parameter, the tightest stage's
+    "single": fixed points of the return map. "multiple": the orbit as ``segments``
+    segments (:mod:`.multishoot`; the arclength then measures all segment starts and
+    T, so ``ds`` means a longer step in the orbit than with single shooting; it marks
+    no symmetry-breaking points, and warns so for in-phase orbits). "auto": single,
+    and where it ends with "step-too-small" or "precision-limit", multiple shooting
+    from its last point on (same direction in the parameter, the tightest stage's
     tolerances), appended to the branch (``status`` names both ends).
 segments : int
     m >= 1, the segments of multiple shooting (even cuts in time). An orbit
