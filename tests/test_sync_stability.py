@@ -283,23 +283,68 @@ def test_in_phase_and_anti_phase_motion_coexist_at_eta_3():
     assert 0.02 < in_phase[0].fraction < 0.15  # measured 0.049 (0.070 on 25 x 25 cells)
 
 
-def test_multiple_shooting_says_that_it_marks_no_symmetry_breaking_points():
-    # the SB test runs on single shooting only: a stretch of an in-phase branch followed by
-    # multiple shooting says so, instead of leaving its SB points unlabelled in silence
-    orbit = _in_phase_orbit(_sym(2, 3.0))
-    with pytest.warns(UserWarning, match="marks no symmetry-breaking") as seen:
-        branch = ssf.continue_orbit(orbit, "eta", (3.0, 3.2), shooting="multiple", max_points=4)
-    assert "eta = 3.0" in str(seen[0].message)
-    assert branch.values.size >= 2 and branch.bifurcations == []
-    for p in branch.points:  # still in phase: the warning is about labels, not the orbits
-        assert synchronous_point(orbit.system, p, 1e-7)
-    # the same two disks apart (the anti-phase orbit of tests/test_branch_points.py) are
-    # not in phase: nothing to warn about
+def test_multiple_shooting_marks_the_symmetry_breaking_point():
+    # the same point as test_continuation_marks_the_symmetry_breaking_point, by multiple
+    # shooting (8 segments): the walk is projected onto the in-phase starts and the test
+    # is det(Phi_d - I) from the segments' transverse factors
+    orbit = _in_phase_orbit(_sym(2, 4.762))
+    branch = ssf.continue_orbit(orbit, "eta", (4.762, 4.766), shooting="multiple")
+    assert branch.values[-1] == pytest.approx(4.766)
+    (sb,) = [b for b in branch.bifurcations if b.kind == "symmetry-breaking"]
+    assert [b.kind for b in branch.bifurcations] == ["symmetry-breaking"]
+    # the reference 4.7638949 (rtol 1e-12 secant, above); measured 4.76389484 (single
+    # shooting at its defaults: 4.7638980, the tangents' accuracy)
+    assert abs(sb.value - 4.7638949) < 2e-6
+    assert branch.stable[sb.index] and not branch.stable[sb.index + 1]
+    for p in branch.points:
+        assert np.max(np.abs(p[:4] - p[4:8])) < 1e-12  # measured 5e-18
+    for d, inside in ((-2e-4, True), (2e-4, False)):
+        o = ssf.find_orbit(orbit.system.replace(eta=sb.value + d), sb.point)
+        assert ssf.sync_stability(o).transverse_stable is inside
+    # from its point a curve of SB points goes on as from single shooting's
+    curve = ssf.continue_bifurcation(branch, sb, "beta", (0.0014, 0.01), max_points=3)
+    assert curve.kind == "symmetry-breaking" and len(curve.values) == 3
+
+
+@pytest.mark.parametrize("segments", [1, 3, 8])
+def test_transverse_factors_give_the_transverse_multipliers(eta5, segments):
+    # the segments' 4 x 4 factors multiply to Phi_d: their periodic-QR eigenvalues are
+    # sync_stability's transverse multipliers (from the whole return map's Jacobian)
+    from stickslip_fast.bifurcation.multishoot import MultiShooting, periodic_multipliers
+    from stickslip_fast.bifurcation.multishoot_sync import (
+        symmetry_breaking_test,
+        transverse_factors,
+    )
+
+    orbits, stab = eta5
+    orbit, ref = orbits[2], stab[2]
+    ms = MultiShooting(orbit.system, segments, 1e-10, 1e-12, 1e-10)
+    st, Y = ms.states_at(orbit.points[:1], orbit.T, ms.mesh[:-1] * orbit.T)
+    status, G, _, factors = ms.evaluate(ms.pack(Y, orbit.T))
+    assert st == status == "ok" and np.max(np.abs(G)) < 1e-9
+    mu = periodic_multipliers(transverse_factors(orbit.system, orbit.points[0], factors))
+    np.testing.assert_allclose(mu[:2].real, ref.transverse[:2].real, atol=1e-6)  # 3e-7
+    assert np.all(np.abs(mu[2:]) < 1e-12) and np.all(np.abs(ref.transverse[2:]) < 1e-12)
+    det = np.linalg.det(ref.transverse_block - np.eye(4))  # -0.13624
+    test = symmetry_breaking_test(orbit.system, orbit.points[0], factors)
+    assert test == pytest.approx(det, rel=1e-5)
+
+
+def test_no_symmetry_breaking_test_for_multiple_shooting_off_the_in_phase_subspace():
+    # the two disks apart (the anti-phase orbit of tests/test_branch_points.py) are not in
+    # phase: multiple shooting neither projects them nor tests them for SB points
+    from stickslip_fast.bifurcation.multishoot import MultiShooting
+    from stickslip_fast.bifurcation.multishoot_sync import in_phase_start
+
     apart = ssf.find_orbit(_sym(2, 1.1275682582876292), np.array([
         0.03734505165096868, 0.0, 0.0, 0.0, 0.060820214617317424, 0.0009027951066187418,
         0.0, 0.0, 0.00979440927478325]))  # fmt: skip
     assert apart.converged and not synchronous_point(apart.system, apart.points[0])
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        ssf.continue_orbit(apart, "eta", (1.1, 1.2), shooting="multiple", max_points=4)
-    assert not [w for w in caught if "symmetry-breaking" in str(w.message)]
+    ms = MultiShooting(apart.system, 4, 1e-10, 1e-12, 1e-10)
+    _, Y = ms.states_at(apart.points[:1], apart.T, ms.mesh[:-1] * apart.T)
+    assert not in_phase_start(apart.system, ms, np.r_[ms.pack(Y, apart.T), 1.1275682582876292])
+    branch = ssf.continue_orbit(apart, "eta", (1.1, 1.2), shooting="multiple", max_points=4)
+    assert branch.values.size >= 2
+    assert not [b for b in branch.bifurcations if b.kind == "symmetry-breaking"]
+    gaps = [np.max(np.abs(p[:4] - p[4:8])) for p in branch.points]
+    assert min(gaps) > 1e-2  # still apart: not projected onto the in-phase states

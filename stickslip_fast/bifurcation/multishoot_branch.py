@@ -25,10 +25,10 @@ from .multishoot import (
     remesh,
 )
 from .multishoot_orbit import initial_segments, newton_multiple
+from .multishoot_sync import in_phase_marks, in_phase_start, project_segments
 from .orbit_record import branch_point_marks, multipliers_stable
 from .returnmap import _TANGENT_ATOL, _field
 from .stickphases import stick_phases
-from .synchrony import warn_symmetry_breaking_unmarked
 from .walk_args import WalkSettings
 
 
@@ -134,8 +134,12 @@ def continue_multiple(system0, param, period, x0, direction, bounds, walk: WalkS
             nxt = tuple(min(a, b) for a, b in zip(settings[-1], stage))
             if nxt != settings[-1]:
                 settings.append(nxt)
+    # an in-phase start on a DC motor: the walk stays in phase and marks SB points
+    ms0 = MultiShooting(system0, segments, walk.rtol, walk.atol, _TANGENT_ATOL)
+    in_phase = in_phase_start(system0, ms0, x0)
     kw = dict(ds=walk.ds, ds_max=walk.ds_max, max_points=walk.max_points,
-              fd_step=walk.fd_step, chord=chord, max_segments=max_segments)  # fmt: skip
+              fd_step=walk.fd_step, chord=chord, max_segments=max_segments,
+              in_phase=in_phase)  # fmt: skip
     pieces, status = walk_pieces(system0, param, x0, direction, bounds, segments, settings,
                                  remesh, kw)  # fmt: skip
     _, system_at, _ = ms_evaluator(system0, param, segments, walk.rtol, walk.atol, walk.fd_step)
@@ -162,7 +166,6 @@ def continue_multiple(system0, param, period, x0, direction, bounds, walk: WalkS
         bifs.extend((b, v, i + off, pc.ms.unpack(x[:-1])[0][0]) for b, v, i, x in pc.bifs)
     bifs.sort(key=lambda b: (b[2], b[1] if direction >= 0 else -b[1]))
     mults = np.array(mults)
-    warn_symmetry_breaking_unmarked(system0, pts[0], param, vals[0])
     return Branch(
         system=system0, param=param, period=period, values=np.array(vals),
         points=np.array(pts), T=np.array(Ts), multipliers=mults,
@@ -202,6 +205,8 @@ class _RemeshTrigger:
         self.mesh, self.ds, self.stages_left, self.limit_hit = None, math.nan, 0, math.nan
 
     def __call__(self, x, A, walk) -> bool:
+        if isinstance(A, tuple):  # an in-phase walk's (factors, x)
+            A = A[0]
         norms = np.array([np.linalg.norm(a, 2) for a in A])
         if not float(np.max(norms)) > self.limit:
             return False
@@ -276,6 +281,11 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         for t2, r2, a2, d2 in settings[stage + 1 :]:
             ev, _, _ = ms_evaluator(system0, param, mesh, r2, a2, kw["fd_step"])
             refine.append((ev, t2, d2))
+        marks = {"tests": multiplier_tests, "spectrum": periodic_multipliers}
+        if kw["in_phase"]:
+            evaluate = project_segments(evaluate, system0, ms)
+            refine = [(project_segments(ev, system0, ms), t2, d2) for ev, t2, d2 in refine]
+            marks = in_phase_marks(system_at, ms, multiplier_tests, periodic_multipliers)
         trigger = _RemeshTrigger(ms, system_at, limit, kw["max_segments"]) if remesh_ else None
         # a crawl: the last steps together below the first stage's ds_min or its tol (steps
         # smaller than the corrector's tolerance do not move the branch; a walk handed on by
@@ -283,9 +293,8 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         xs, mults, bifs, status = pseudo_arclength(
             evaluate, x_start, direction, bounds, ds=ds, ds_min=ds_min, ds_max=kw["ds_max"],
             max_points=left, tol=tol, jump=_jump_test(ms, system_at), refine=refine,
-            tests=multiplier_tests, spectrum=periodic_multipliers, orient=orient,
-            stall_ds_min=max(settings[0][3], settings[0][0]), stop=trigger,
-            **branch_point_marks(system0),
+            orient=orient, stall_ds_min=max(settings[0][3], settings[0][0]), stop=trigger,
+            **marks, **branch_point_marks(system0),
         )  # fmt: skip
         pieces.append(_Piece(ms, evaluate, tol, xs, np.asarray(mults), bifs))
         if status != "stopped":
@@ -296,6 +305,8 @@ def walk_pieces(system0, param, x0, direction, bounds, segments, settings, remes
         tol, rtol, atol, _ = settings[stage]
         ev_new, _, shoot_new = ms_evaluator(system0, param, trigger.mesh, rtol, atol,
                                             kw["fd_step"])  # fmt: skip
+        if kw["in_phase"]:
+            ev_new = project_segments(ev_new, system0, shoot_new(xs[-1][-1], None))
         # the last point, in the stage reached: correct it with that stage's evaluator
         ms_cur = MultiShooting(ms.system, ms.mesh, rtol, atol, _TANGENT_ATOL)
         x_new, orient = _resume(ms_cur, shoot_new(xs[-1][-1], None), ev_new, xs, tol, system_at)

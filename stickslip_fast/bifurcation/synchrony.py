@@ -38,7 +38,6 @@ the computed Jacobian keeps the two subspaces apart.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -143,24 +142,6 @@ def synchronous_point(system: System, z: np.ndarray, tol: float = SYNC_TOL) -> b
     disks = np.asarray(z, dtype=float)[: 4 * n].reshape(n, 4)
     scale = max(1.0, float(np.max(np.abs(disks))))
     return bool(np.max(np.abs(disks - disks[0])) <= tol * scale)
-
-
-def warn_symmetry_breaking_unmarked(system: System, state: np.ndarray, param: str,
-                                    value: float) -> None:  # fmt: skip
-    """Warn where a branch of in-phase orbits of disks on one DC motor goes on by multiple
-    shooting: its walk has no symmetry-breaking test (:func:`in_phase_walk` serves single
-    shooting only), so a transverse multiplier through +1 there gets no label."""
-    if not (system.is_dc_motor and synchronous_point(system, state, WALK_SYNC_TOL)):
-        return
-    warnings.warn(
-        f"continue_orbit: the in-phase orbits from {param} = {plain(value)} on are followed "
-        "by multiple shooting, which marks no symmetry-breaking (SB) points: a multiplier "
-        "across the disks that passes +1 there gets no label. Check the orbits' stability "
-        "across the disks with sync_stability(find_orbit(...)), or follow this stretch by "
-        "single shooting (docs/orbits.md).",
-        UserWarning,
-        stacklevel=2,
-    )
 
 
 def _embed(system: System, jac: np.ndarray, v: np.ndarray) -> np.ndarray:
