@@ -29,6 +29,7 @@ import json
 import logging
 import os
 import struct
+import threading
 import time
 import zlib
 from collections.abc import Callable, Iterator, Mapping
@@ -181,6 +182,8 @@ class Journal:
         self.hits = self.misses = 0
         self._records: dict[bytes, bytes] = {}
         self._last_sync = time.monotonic()
+        # calls may come from several threads at once (the segments of multiple shooting)
+        self._guard = threading.Lock()
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._file = open(self.path, "a+b")  # noqa: SIM115 - closed by close()
         try:
@@ -231,15 +234,22 @@ class Journal:
     def call(self, kernel: Callable, args: tuple, abort: np.ndarray) -> Any:
         """``kernel(*args, abort)``, from the file if recorded, else computed and recorded."""
         key = _key(kernel, args)
-        data = self._records.get(key)
+        with self._guard:
+            data = self._records.get(key)
+            if data is not None:
+                self.hits += 1
         if data is not None:
-            self.hits += 1
             return _decode(data)
         out = call_interruptible(kernel, *args, abort=abort)
+        if abort[0]:
+            # stopped by Ctrl-C in a worker thread (the main thread raises it): a result
+            # cut short must not be replayed as the call's answer
+            raise KeyboardInterrupt
         data = _encode(out)
-        self._append(key + data)
-        self._records[key] = data
-        self.misses += 1
+        with self._guard:
+            self._append(key + data)
+            self._records[key] = data
+            self.misses += 1
         return out
 
     def close(self) -> None:

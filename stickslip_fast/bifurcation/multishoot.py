@@ -25,11 +25,16 @@ factor kept as a logarithm.
 
 from __future__ import annotations
 
+import contextvars
 import math
+import os
+from collections.abc import Iterable
+from concurrent.futures import ThreadPoolExecutor, wait
 
+import numba
 import numpy as np
 
-from ..base.interrupt import new_abort_flag
+from ..base.interrupt import call_interruptible, new_abort_flag
 from ..base.journal import call_journaled
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
@@ -56,6 +61,21 @@ REMESH_LIMIT = 10.0 * MESH_LIMIT
 
 #: The most segments a mesh gets (:func:`refine_mesh`, :func:`remesh`).
 MAX_SEGMENTS = 64
+
+
+#: The thread pools of :meth:`MultiShooting.segment_flows`, by (process, threads): kept
+#: between calls (a walk evaluates its segments hundreds of times; starting the threads
+#: anew each time cost ~15 % of a one-disk walk), and never used in a forked child,
+#: whose copy holds no threads.
+_POOLS: dict[tuple[int, int], ThreadPoolExecutor] = {}
+
+
+def _segment_pool(threads: int) -> ThreadPoolExecutor:
+    key = (os.getpid(), threads)
+    pool = _POOLS.get(key)
+    if pool is None:
+        pool = _POOLS[key] = ThreadPoolExecutor(threads, thread_name_prefix="stickslip-segment")
+    return pool
 
 
 def periodic_multipliers(
@@ -176,8 +196,10 @@ class MultiShooting:
         return Y, float(u[-1])
 
     # ------------------------------------------------------------- segments
-    def flow(self, y: np.ndarray, tau: float, tangents: bool = True):
-        """(status, phi(y, tau), Phi (n x n, or with the sensitivity n x (n + 1)) or None)."""
+    def flow(self, y: np.ndarray, tau: float, tangents: bool = True, abort=None):
+        """(status, phi(y, tau), Phi (n x n, or with the sensitivity n x (n + 1)) or None).
+        ``abort``: the flag that stops the integration (default: a flag of its own)."""
+        abort = new_abort_flag() if abort is None else abort
         n = self.n
         rtol, atol, tatol = self.kw
         s = self.system
@@ -189,14 +211,11 @@ class MultiShooting:
         args = (np.ascontiguousarray(y, dtype=float), np.ascontiguousarray(U), s.to_array(),
                 s.n_oscillators, s.is_dc_motor, variant, float(tau), 0, rtol, atol, tatol)  # fmt: skip
         if sens_p is None:
-            code, y1, U1, _ = call_journaled(
-                propagate_tangents, *args, _MAX_STEPS, abort=new_abort_flag()
-            )
+            code, y1, U1, _ = call_journaled(propagate_tangents, *args, _MAX_STEPS, abort=abort)
         else:
             code, y1, U1, _ = call_journaled(
-                propagate_sensitivity, *args, sens_p, sens_inv, _MAX_STEPS,
-                abort=new_abort_flag(),
-            )  # fmt: skip
+                propagate_sensitivity, *args, sens_p, sens_inv, _MAX_STEPS, abort=abort
+            )
         status = STATUS_NAMES[code]
         if status == "ok" and not np.all(np.isfinite(y1)):
             status = "nonfinite"
@@ -213,8 +232,7 @@ class MultiShooting:
         G = np.empty(N)
         DG = np.zeros((N, N + extra))
         phis = []
-        for i in range(m):
-            st, y1, U1 = self.flow(Y[i], self.frac[i] * T)
+        for i, (st, y1, U1) in enumerate(self.segment_flows(Y, T)):
             if st != "ok":
                 return st, None, None, None
             r = slice(i * n, (i + 1) * n)
@@ -230,6 +248,36 @@ class MultiShooting:
             if i == m - 1:
                 f_end = _field(self.system, y1)
         return "ok", G, DG, self.section_factors(phis, f_end)
+
+    def segment_flows(self, Y: np.ndarray, T: float) -> Iterable[tuple]:
+        """:meth:`flow` of every segment (starts Y, period T), in order.
+
+        The segments are independent, so they run on up to ``numba.get_num_threads()``
+        threads (the kernel releases the GIL); each is the same sequential integration
+        whichever thread runs it, so the results do not depend on the thread count.
+        Ctrl-C stops them all (one flag, armed in the calling thread).
+        """
+        taus = [float(self.frac[i] * T) for i in range(self.m)]
+        threads = min(self.m, numba.get_num_threads())
+        if threads == 1:  # lazily: a caller that stops at a failed segment runs no more
+            return (self.flow(Y[i], taus[i]) for i in range(self.m))
+
+        def run_all(abort: np.ndarray) -> list[tuple]:
+            # each task in a copy of the caller's context: the journal in force
+            futures = [
+                _segment_pool(threads).submit(
+                    contextvars.copy_context().run, self.flow, Y[i], taus[i], True, abort
+                )  # fmt: skip
+                for i in range(self.m)
+            ]
+            try:
+                return [f.result() for f in futures]
+            finally:  # on Ctrl-C the running segments stop on the flag, the others never start
+                for f in futures:
+                    f.cancel()
+                wait(futures)
+
+        return call_interruptible(run_all, abort=new_abort_flag())
 
     def _cols(self, i: int) -> slice:
         n = self.n

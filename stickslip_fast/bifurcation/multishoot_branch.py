@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from ..base.blas import one_blas_thread
 from .arclength import pseudo_arclength
 from .branch import Bifurcation, Branch, segments_of
 from .corrector import NOISE_FLOOR, _correct, _locate_change
@@ -116,6 +117,7 @@ def ms_start(system, z, T, param, segments, rtol, atol, fd_step, tol, mesh_limit
     return np.r_[u, float(getattr(system, param))], ms.mesh
 
 
+@one_blas_thread()
 def continue_multiple(system0, param, period, x0, direction, bounds, walk: WalkSettings, *,
                       segments, stages, remesh=False, chord=None,
                       max_segments=MAX_SEGMENTS) -> Branch:  # fmt: skip

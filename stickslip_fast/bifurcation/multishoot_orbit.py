@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ..base.blas import one_blas_thread
 from ..model.system import System
 from .equilibria import EQUILIBRIUM_SPEED
 from .multishoot import MAX_SEGMENTS, MESH_LIMIT, MultiShooting, periodic_multipliers, refine_mesh
@@ -113,6 +114,7 @@ def _failed_orbit(system: System, period: int, z) -> dict:
                 iterations=0, converged=False)  # fmt: skip
 
 
+@one_blas_thread()
 def find_orbit_multiple(
     system: System,
     z: np.ndarray,
