@@ -1,4 +1,5 @@
-"""Multiple shooting integrates its segments on threads (MultiShooting.segment_flows).
+"""Independent integrations on threads: multiple shooting's segments
+(MultiShooting.segment_flows) and a two-parameter curve's Jacobians (run_concurrently).
 
 The segments are independent integrations, so the results must be the same bits on
 one thread or several; Ctrl-C must stop every segment; and a checkpoint must never
@@ -12,13 +13,14 @@ import signal
 import threading
 import time
 
+import numba
 import numpy as np
 import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.base import journal as jmod
+from stickslip_fast.base import threads as bthreads
 from stickslip_fast.base.interrupt import new_abort_flag
-from stickslip_fast.bifurcation import multishoot
 from stickslip_fast.bifurcation.multishoot import MultiShooting
 
 
@@ -33,7 +35,7 @@ def orbit():
 def _threads(monkeypatch, n: int) -> list[str]:
     """Let segment_flows use ``n`` threads (whatever the cores), and record which
     threads integrate."""
-    monkeypatch.setattr(multishoot.numba, "get_num_threads", lambda: n)
+    monkeypatch.setattr(numba, "get_num_threads", lambda: n)
     names: list[str] = []
     real = MultiShooting.flow
 
@@ -59,12 +61,12 @@ def test_segments_on_threads_give_the_same_bits(orbit, monkeypatch, threads):
                                     max_points=5, progress=False)  # fmt: skip
     assert set(names) == {"MainThread"}
     names.clear()
-    monkeypatch.setattr(multishoot.numba, "get_num_threads", lambda: threads)
+    monkeypatch.setattr(numba, "get_num_threads", lambda: threads)
     many = _evaluate(orbit, 7)
     branch_many = ssf.continue_orbit(orbit, "eta", (2.0, 2.1), shooting="multiple",
                                      segments=5, max_points=5, progress=False)  # fmt: skip
     # the pool's threads integrated the segments (the calling thread: the rest)
-    assert len({n for n in names if n.startswith("stickslip-segment")}) >= 2
+    assert len({n for n in names if n.startswith("stickslip-worker")}) >= 2
     assert one[0] == many[0] == "ok"
     for a, b in zip(one[1:3], many[1:3]):
         np.testing.assert_array_equal(a, b)
@@ -111,3 +113,58 @@ def test_a_segment_cut_short_is_not_recorded(tmp_path):
         assert (j.hits, j.misses) == (0, 1)
     with jmod.journal(tmp_path / "j.ckpt", "test", {"a": 1}) as j:
         assert j.recorded == 1
+
+
+def test_run_concurrently_keeps_order_errors_and_nesting(monkeypatch):
+    monkeypatch.setattr(numba, "get_num_threads", lambda: 3)
+    seen = []
+
+    def call(k):
+        seen.append(threading.current_thread().name)
+        # nested work in a worker runs in that worker, one call after the other
+        inner = bthreads.run_concurrently([lambda: k, lambda: -k])
+        return k * k, inner
+
+    out = bthreads.run_concurrently([lambda k=k: call(k) for k in range(8)])
+    assert out == [(k * k, [k, -k]) for k in range(8)]
+    assert "MainThread" in seen and any(n.startswith("stickslip-worker") for n in seen)
+
+    def fail():
+        raise RuntimeError("segment 3 failed")
+
+    with pytest.raises(RuntimeError, match="segment 3 failed"):
+        bthreads.run_concurrently([lambda: 1, fail, lambda: 2])
+
+
+@pytest.fixture(scope="module")
+def fold_point():
+    # the upper fold of Fig. 6's period-1 branch at k12 = -0.8 (tests/test_checkpoint.py)
+    s = ssf.System.preset("asymmetric", eta=3.30, k12=-0.8)
+    o = ssf.find_orbit(s, np.array([0.07332092304307371, 0.0, 0.12221581726865255,
+                                    -0.00674109106906407]), 1)  # fmt: skip
+    branch = ssf.continue_orbit(o, "eta", (3.30, 3.35), ds=2e-3, ds_max=5e-3, max_points=100,
+                                stick_events=False, progress=False)  # fmt: skip
+    return branch, next(b for b in branch.bifurcations if b.kind == "fold")
+
+
+def test_a_fold_curve_is_the_same_on_one_thread_or_three(fold_point, monkeypatch):
+    # each step's four return maps (two sensitivities at x, then x +- h v) run side by side
+    branch, fold = fold_point
+    pools = []
+    real = bthreads.shared_pool
+
+    def spy(workers):
+        pools.append(workers)
+        return real(workers)
+
+    monkeypatch.setattr(bthreads, "shared_pool", spy)
+    curves = {}
+    for n in (1, 3):
+        monkeypatch.setattr(numba, "get_num_threads", lambda n=n: n)
+        curves[n] = ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.79), direction=-1,
+                                             max_points=4, stick_events=False)  # fmt: skip
+        assert bool(pools) is (n > 1)  # on threads only when there are
+    assert len(curves[1].values) == 4
+    np.testing.assert_array_equal(curves[1].values, curves[3].values)
+    np.testing.assert_array_equal(curves[1].points, curves[3].points)
+    np.testing.assert_array_equal(curves[1].multipliers, curves[3].multipliers)

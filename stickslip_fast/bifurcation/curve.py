@@ -19,6 +19,7 @@ import numpy as np
 
 from ..base.journal import journal
 from ..base.messages import plain
+from ..base.threads import run_concurrently
 from ..model.system import SWEEPABLE
 from .branch import Bifurcation, Branch
 from .corrector import _locate_change
@@ -89,13 +90,16 @@ def _two_param_evaluator(system0, param, param2, p, rtol, atol, fd_step):
             return False, None, None, None
         z = np.zeros(n)
         z[mask] = x[:-2]
-        cols = []
-        for name in (param, param2):
-            st, pts, times, jac = return_map(s, z, p, rtol=rtol, atol=atol, param=name,
-                                             param_step=fd_step)  # fmt: skip
-            if st != "ok":
-                return False, None, None, None
-            cols.append(jac[:, -1:])
+        # the map with each parameter's sensitivity: two independent integrations, side by side
+        maps = run_concurrently([
+            functools.partial(return_map, s, z, p, rtol=rtol, atol=atol, param=name,
+                              param_step=fd_step)
+            for name in (param, param2)
+        ])  # fmt: skip
+        if any(m[0] != "ok" for m in maps):
+            return False, None, None, None
+        cols = [m[3][:, -1:] for m in maps]
+        _, pts, times, jac = maps[-1]
         A = jac[:, :-1]
         periods[x.tobytes()] = float(times[-1])
         DG = np.hstack([A - np.eye(n - 1), *cols])

@@ -23,11 +23,13 @@ a = b = 0).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 
 import numpy as np
 
+from ..base.threads import run_concurrently
 from .arclength import pseudo_arclength
 from .corrector import _correct, _tangent
 
@@ -58,18 +60,29 @@ def _bordered(M, b, c):
     return sol[:n], solT[:n], float(sol[n])
 
 
+def central_differences(base: Callable, x: np.ndarray, directions: list[np.ndarray], n_z: int,
+                        h: float, norm: float) -> list[np.ndarray] | None:  # fmt: skip
+    """DG(x + dx) - DG(x - dx) for each direction, dx = h direction / norm in the first
+    ``n_z`` coordinates (times norm / (2 h): DG's derivative along it), or None where
+    ``base`` fails anywhere. The evaluations are independent and run side by side
+    (:func:`~stickslip_fast.base.threads.run_concurrently`)."""
+    shifts = []
+    for d in directions:
+        dx = np.zeros_like(x)
+        dx[:n_z] = h * d / norm
+        shifts += [x + dx, x - dx]
+    out = run_concurrently([functools.partial(base, y) for y in shifts])
+    if not all(o[0] for o in out):
+        return None
+    return [out[k][2] - out[k + 1][2] for k in range(0, len(out), 2)]
+
+
 def central_difference(base: Callable, x: np.ndarray, direction: np.ndarray, n_z: int,
                        h: float, norm: float):  # fmt: skip
-    """DG(x + dx) - DG(x - dx) with dx = h direction / norm in the first ``n_z``
-    coordinates (times norm / (2 h): DG's derivative along ``direction``), or None
-    where ``base`` fails at either end. Shared by the fold/PD and the NS test functions."""
-    dx = np.zeros_like(x)
-    dx[:n_z] = h * direction / norm
-    ok_p, _, DGp, _ = base(x + dx)
-    ok_m, _, DGm, _ = base(x - dx)
-    if not (ok_p and ok_m):
-        return None
-    return DGp - DGm
+    """:func:`central_differences` along one direction. Shared by the fold/PD, NS and SB
+    test functions."""
+    diffs = central_differences(base, x, [direction], n_z, h, norm)
+    return None if diffs is None else diffs[0]
 
 
 def augmented(base: Callable, n_z: int, kind: str, b: np.ndarray, c: np.ndarray, h: float,

@@ -25,17 +25,14 @@ factor kept as a logarithm.
 
 from __future__ import annotations
 
-import contextvars
 import math
-import os
 from collections.abc import Iterable
-from concurrent.futures import ThreadPoolExecutor, wait
 
-import numba
 import numpy as np
 
 from ..base.interrupt import call_interruptible, new_abort_flag
 from ..base.journal import call_journaled
+from ..base.threads import finish, shared_pool, submit, thread_count
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
 from ..core.variational import propagate_sensitivity, propagate_tangents
@@ -61,21 +58,6 @@ REMESH_LIMIT = 10.0 * MESH_LIMIT
 
 #: The most segments a mesh gets (:func:`refine_mesh`, :func:`remesh`).
 MAX_SEGMENTS = 64
-
-
-#: The thread pools of :meth:`MultiShooting.segment_flows`, by (process, threads): kept
-#: between calls (a walk evaluates its segments hundreds of times; starting the threads
-#: anew each time cost ~15 % of a one-disk walk), and never used in a forked child,
-#: whose copy holds no threads.
-_POOLS: dict[tuple[int, int], ThreadPoolExecutor] = {}
-
-
-def _segment_pool(threads: int) -> ThreadPoolExecutor:
-    key = (os.getpid(), threads)
-    pool = _POOLS.get(key)
-    if pool is None:
-        pool = _POOLS[key] = ThreadPoolExecutor(threads, thread_name_prefix="stickslip-segment")
-    return pool
 
 
 def periodic_multipliers(
@@ -258,24 +240,17 @@ class MultiShooting:
         Ctrl-C stops them all (one flag, armed in the calling thread).
         """
         taus = [float(self.frac[i] * T) for i in range(self.m)]
-        threads = min(self.m, numba.get_num_threads())
+        threads = thread_count(self.m)
         if threads == 1:  # lazily: a caller that stops at a failed segment runs no more
             return (self.flow(Y[i], taus[i]) for i in range(self.m))
 
         def run_all(abort: np.ndarray) -> list[tuple]:
-            # each task in a copy of the caller's context: the journal in force
-            futures = [
-                _segment_pool(threads).submit(
-                    contextvars.copy_context().run, self.flow, Y[i], taus[i], True, abort
-                )  # fmt: skip
-                for i in range(self.m)
-            ]
+            pool = shared_pool(threads)
+            futures = [submit(pool, self.flow, Y[i], taus[i], True, abort) for i in range(self.m)]
             try:
                 return [f.result() for f in futures]
             finally:  # on Ctrl-C the running segments stop on the flag, the others never start
-                for f in futures:
-                    f.cancel()
-                wait(futures)
+                finish(futures)
 
         return call_interruptible(run_all, abort=new_abort_flag())
 

@@ -39,7 +39,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .detection import _sorted_eigs
-from .foldcurve import _product, central_difference, curve_tests, refresh_borders, run_curve
+from .foldcurve import _product, central_differences, curve_tests, refresh_borders, run_curve
 
 #: The kind name of an NS curve (as :class:`~.branch.Bifurcation`'s).
 NS_KIND = "neimark-sacker"
@@ -95,12 +95,10 @@ def ns_augmented(base: Callable, n_z: int, b: np.ndarray, c: np.ndarray, h: floa
             return False, None, None, None
         state["v"], state["w"] = v, w
         nv = float(np.linalg.norm(v))
-        cols = []
-        for part in (v.real, v.imag):
-            diff = central_difference(base, y, part, n_z, h, nv)
-            if diff is None:
-                return False, None, None, None
-            cols.append(diff * (nv / (2 * h)))
+        diffs = central_differences(base, y, [v.real, v.imag], n_z, h, nv)
+        if diffs is None:
+            return False, None, None, None
+        cols = [diff * (nv / (2 * h)) for diff in diffs]
         grad_y = -(w.conj() @ (cols[0] + 1j * cols[1]))
         grad = np.r_[grad_y[:n_z], 1j * e * np.vdot(w, v), grad_y[n_z:]]
         sc = state["scale"]

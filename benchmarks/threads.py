@@ -1,8 +1,9 @@
-"""Multiple shooting with its segments on threads: wall time against one thread.
+"""Independent integrations on threads: wall time against one thread.
 
-``python -m benchmarks.multishoot_threads [--threads 1 2] [--rounds 3]``. Each workload
+``python -m benchmarks.threads [--threads 1 2] [--rounds 3]``. Each workload
 runs with each thread count (``numba.set_num_threads``, which
-``MultiShooting.segment_flows`` follows), the counts alternating round by round in one
+``MultiShooting.segment_flows`` and ``base.threads.run_concurrently`` follow), the counts
+alternating round by round in one
 process after a warm-up; it reports the median wall time per count, the ratio to one
 thread, and whether every result is bit-identical to the one-thread result. Workloads:
 
@@ -10,9 +11,13 @@ thread, and whether every result is bit-identical to the one-thread result. Work
   eta in [4.762, 4.766] by multiple shooting, through its symmetry-breaking point (the
   start's mesh is refined to ~26 segments);
 * ``fold_walk``: Fig. 6's period-1 branch (one disk) over eta in [2.0, 2.5] on 8 segments;
-* ``find_orbit``: ``find_orbit(shooting="multiple", segments=16)`` at eta = 2.0.
+* ``find_orbit``: ``find_orbit(shooting="multiple", segments=16)`` at eta = 2.0;
+* ``fold_curve``: the upper fold of Fig. 6's period-1 branch at k12 = -0.8 followed in
+  k12 (``continue_bifurcation``, 12 points; each step's return maps side by side);
+* ``pd_curve``: the period-doubling of Fig. 6's period-2 orbit at eta = 5.04295 followed
+  in k12 (8 points).
 
-Results go to ``benchmarks/results/multishoot_threads.json`` (``--out``).
+Results go to ``benchmarks/results/threads.json`` (``--out``).
 """
 
 from __future__ import annotations
@@ -35,6 +40,12 @@ import numpy as np  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
 
+# the stable period-1 orbit at eta = 3.3, k12 = -0.8 (benchmarks/foldcurve.py)
+Z33 = np.array([0.07332092304307371, 0.0, 0.12221581726865255, -0.00674109106906407])
+# a point of Fig. 6's period-2 orbit near its period-doubling (tests/test_foldcurve_orbit.py)
+P2_ETA = 5.043198103554579
+P2_POINT = np.array([0.027234629670059556, 0.0, 0.12785148813700828, -0.0038733936156032087])
+
 
 def _orbit(system: ssf.System) -> ssf.Orbit:
     with warnings.catch_warnings():
@@ -51,7 +62,27 @@ def workloads() -> dict:
     def branch(b) -> list:
         return [b.values, b.points, b.multipliers, b.T, [(x.kind, x.value) for x in b.bifurcations]]
 
+    s33 = ssf.System.preset("asymmetric", eta=3.30, k12=-0.8)
+    o33 = ssf.find_orbit(s33, Z33, 1)
+    b33 = ssf.continue_orbit(o33, "eta", (3.30, 3.35), ds=2e-3, ds_max=5e-3, max_points=100,
+                             stick_events=False, progress=False)  # fmt: skip
+    fold = next(b for b in b33.bifurcations if b.kind == "fold")
+    s5 = ssf.System.preset("asymmetric", eta=P2_ETA, k12=-0.8)
+    b5 = ssf.continue_orbit(ssf.find_orbit(s5, P2_POINT, period=2), "eta", (5.0428, 5.0433),
+                            ds=2e-5, ds_min=1e-9, ds_max=4e-5, max_points=8, direction=-1,
+                            progress=False)  # fmt: skip
+    pd = next(b for b in b5.bifurcations if b.kind == "period-doubling")
+
+    def curve(c) -> list:
+        return [c.values, c.points, c.multipliers]
+
     return {
+        "fold_curve": lambda: curve(ssf.continue_bifurcation(
+            b33, fold, "k12", (-0.95, -0.79), direction=-1, max_points=12,
+            stick_events=False)),
+        "pd_curve": lambda: curve(ssf.continue_bifurcation(
+            b5, pd, "k12", (-0.806, -0.79), direction=-1, ds=0.002, ds_max=0.005,
+            max_points=8, stick_events=False)),
         "sb_walk": lambda: branch(ssf.continue_orbit(
             two, "eta", (4.762, 4.766), shooting="multiple", progress=False)),
         "fold_walk": lambda: branch(ssf.continue_orbit(
@@ -73,7 +104,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/multishoot_threads.json")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks/results/threads.json")
     args = ap.parse_args()
     calls = workloads()
     for fn in calls.values():  # compile and warm
