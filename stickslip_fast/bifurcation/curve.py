@@ -17,6 +17,7 @@ import os
 
 import numpy as np
 
+from ..base.blas import one_blas_thread
 from ..base.journal import journal
 from ..base.messages import plain
 from ..base.threads import run_concurrently
@@ -210,6 +211,7 @@ def continue_bifurcation(
 continue_bifurcation.__doc__ = _CONTINUE_BIFURCATION_DOC
 
 
+@one_blas_thread()  # its return maps run on threads (base/threads.py): BLAS must not spin
 def _orbit_curve(branch, bifurcation, param2, bounds2, system0, direction, steps, settings,
                  stick_events):  # fmt: skip
     """:func:`continue_bifurcation` for an orbit branch (arguments checked)."""
