@@ -12,6 +12,7 @@ import textwrap
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 
@@ -252,8 +253,12 @@ def _resumed_halfway(run, tmp_path, monkeypatch, caplog):
     return run(path), total
 
 
+@pytest.mark.parametrize("threads", [1, 3])
 def test_a_multiple_shooting_branch_resumes_bit_identically(fold_branch, tmp_path,
-                                                            monkeypatch, caplog):  # fmt: skip
+                                                            monkeypatch, caplog, threads):  # fmt: skip
+    # on 3 threads the segments' calls reach the journal from the pool's workers, and the
+    # interruption is raised in one of them
+    monkeypatch.setattr(numba, "get_num_threads", lambda: threads)
     orbit, _, _ = fold_branch
     kw = dict(ds=2e-3, ds_max=5e-3, max_points=6, shooting="multiple", segments=3,
               stick_events=False, progress=False)  # fmt: skip
