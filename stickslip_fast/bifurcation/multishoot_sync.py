@@ -37,6 +37,7 @@ from .synchrony import (
     in_phase_projector,
     pair_matrix,
     section_directions,
+    state_projector,
     synchronous_point,
     transverse_monodromy,
 )
@@ -53,19 +54,6 @@ def in_phase_start(system: System, ms: MultiShooting, x: np.ndarray) -> bool:
     return all(synchronous_point(system, y, WALK_SYNC_TOL) for y in Y)
 
 
-def _state_projector(system: System) -> np.ndarray:
-    """The orthogonal projector onto the in-phase states: each of a disk's four
-    coordinates replaced by its mean over the disks, v_b kept."""
-    n_osc, n = system.n_oscillators, system.n_state
-    S = np.zeros((n, n))
-    for j in range(4):
-        idx = np.arange(j, 4 * n_osc, 4)
-        S[np.ix_(idx, idx)] = 1.0 / n_osc
-    if system.is_dc_motor:
-        S[-1, -1] = 1.0
-    return S
-
-
 def _unknowns_projector(system: System, ms: MultiShooting) -> np.ndarray:
     """Pi on x = (u, lambda): the section projector on y_0, the state projector on every
     other start, T and lambda kept."""
@@ -73,7 +61,7 @@ def _unknowns_projector(system: System, ms: MultiShooting) -> np.ndarray:
     size = m * n + 1
     Pi = np.zeros((size, size))
     Pi[: n - 1, : n - 1] = in_phase_projector(system)
-    S = _state_projector(system)
+    S = state_projector(system)
     for i in range(1, m):
         c = ms._cols(i)
         Pi[c, c] = S

@@ -311,19 +311,26 @@ def sync_stability(orbit: Orbit, *, tol: float = SYNC_TOL) -> SyncStability:
     )
 
 
-def in_phase_projector(system: System) -> np.ndarray:
-    """The orthogonal projector onto the in-phase states of the section, in section
-    coordinates (the state without dx1): each disk's x, phi and dphi replaced by their
-    mean over the disks, every dx set to 0 (dx1 is 0 on the section), v_b kept."""
+def state_projector(system: System, coords=(0, 1, 2, 3)) -> np.ndarray:
+    """The orthogonal projector onto the in-phase states (n_state x n_state): each disk's
+    coordinates ``coords`` (of x, dx, phi, dphi) replaced by their mean over the disks,
+    the others set to 0, v_b kept."""
     n_osc, n = system.n_oscillators, system.n_state
     full = np.zeros((n, n))
-    for j in (0, 2, 3):
+    for j in coords:
         idx = np.arange(j, 4 * n_osc, 4)
         full[np.ix_(idx, idx)] = 1.0 / n_osc
     if system.is_dc_motor:
         full[-1, -1] = 1.0
-    mask = np.arange(n) != SECTION_INDEX
-    return full[np.ix_(mask, mask)]
+    return full
+
+
+def in_phase_projector(system: System) -> np.ndarray:
+    """The orthogonal projector onto the in-phase states of the section, in section
+    coordinates (the state without dx1): each disk's x, phi and dphi replaced by their
+    mean over the disks, every dx set to 0 (dx1 is 0 on the section), v_b kept."""
+    mask = np.arange(system.n_state) != SECTION_INDEX
+    return state_projector(system, (0, 2, 3))[np.ix_(mask, mask)]
 
 
 def project_in_phase(evaluate: Callable, S: np.ndarray, n_params: int,
