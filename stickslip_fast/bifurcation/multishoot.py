@@ -244,6 +244,10 @@ class MultiShooting:
         if threads == 1:  # lazily: a caller that stops at a failed segment runs no more
             return (self.flow(Y[i], taus[i]) for i in range(self.m))
 
+        # not run_concurrently: there the calling thread takes a share, and here it runs
+        # inside call_interruptible's armed region, where a SIGINT that lands in a nested
+        # compiled call surfaced as SystemError (tests/test_multishoot_threads.py, Ctrl-C);
+        # the calling thread only waits
         def run_all(abort: np.ndarray) -> list[tuple]:
             pool = shared_pool(threads)
             futures = [submit(pool, self.flow, Y[i], taus[i], True, abort) for i in range(self.m)]
