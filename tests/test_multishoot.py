@@ -75,6 +75,47 @@ def test_multiple_equals_single_shooting(segments):
     np.testing.assert_allclose(np.linalg.eigvals(multi.jacobian).real.min(), -0.0968846, atol=1e-6)
 
 
+def test_a_multiple_shooting_walk_keeps_single_shooting_s_pace():
+    # With the defaults, Fig. 6's period-1 branch over eta 2 -> 3: single shooting takes
+    # 24 points. Multiple shooting took 77 while its arclength measured T in time units
+    # (dT/deta = 3.5 against 0.03 for the section point); with T / 2**k, 26.
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    kw = dict(stick_events=False, progress=False)
+    single = ssf.continue_orbit(orbit, "eta", (2.0, 3.0), **kw)
+    multi = ssf.continue_orbit(orbit, "eta", (2.0, 3.0), shooting="multiple", **kw)
+    assert single.status == multi.status == "bounds", (single.status, multi.status)
+    assert multi.values.size <= 1.25 * single.values.size, (multi.values.size, single.values.size)
+    # the same curve: T and the point at the shared end agree
+    assert abs(multi.T[-1] - single.T[-1]) < 1e-8
+    np.testing.assert_allclose(multi.points[-1], single.points[-1], rtol=0, atol=1e-9)
+
+
+def test_the_walk_s_coordinates_are_exact():
+    # T scaled by a power of two: x -> x̃ -> x is exact, and the wrapped Jacobian is the
+    # raw one with T's column divided by the scale (the chain rule, to the last bit)
+    from stickslip_fast.bifurcation.multishoot_branch import _WalkCoordinates
+
+    rng = np.random.default_rng(7)
+    x0 = np.r_[rng.normal(size=9), 9.642944946320954, 2.0]
+    DG = rng.normal(size=(10, 11))
+
+    def evaluate(x):
+        return True, x[:10] ** 2, DG, None
+
+    walk = _WalkCoordinates(x0, evaluate, [(evaluate, 1e-10, 1e-8)], None, None)
+    assert walk.scale == 0.125  # 2**-3: 9.64 is nearest 8
+    xt = walk.to_walk(x0)
+    assert xt[-2] == x0[-2] / 8 and np.array_equal(walk.from_walk(xt), x0)
+    ok, G, DGt, _ = walk.evaluate(xt)
+    assert ok and np.array_equal(G, x0[:10] ** 2)
+    expected = DG.copy()
+    expected[:, -2] = DG[:, -2] * 8
+    assert np.array_equal(DGt, expected) and np.array_equal(DG[:, -2], evaluate(x0)[2][:, -2])
+    _, _, DGr, _ = walk.refine[0][0](xt)
+    assert np.array_equal(DGr, expected)
+
+
 def test_bad_shooting_arguments_name_the_field():
     s = ssf.System.preset("asymmetric", eta=2.0)
     with pytest.raises(ValueError, match="shooting"):
@@ -151,8 +192,10 @@ def test_multiple_shooting_branch_points_are_fixed_points_of_the_return_map():
 
     s = ssf.System.preset("asymmetric", eta=2.0)
     orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
+    # tol 1e-12: the default 1e-10 on the junctions leaves T free by tol / |v| along the
+    # flow (measured: 2.2e-9 at a point corrected to 2.3e-11), more than the 1e-9 checked
     branch = ssf.continue_orbit(orbit, "eta", (1.9, 2.1), ds=0.01, ds_max=0.02, max_points=4,
-                                shooting="multiple", stick_events=False)  # fmt: skip
+                                shooting="multiple", stick_events=False, tol=1e-12)  # fmt: skip
     assert branch.values.size == 4 and branch.values[-1] > 2.0
     for eta, z, T, mu in zip(branch.values, branch.points, branch.T, branch.multipliers):
         st, pts, times, jac = return_map(s.replace(eta=float(eta)), z, 1)
@@ -180,7 +223,8 @@ def test_a_remeshed_branch_keeps_to_the_orbits_of_the_fixed_mesh(monkeypatch):
     monkeypatch.setattr(multishoot_branch, "remesh", counted)
     s = ssf.System.preset("asymmetric", eta=2.0)
     orbit = ssf.find_orbit(s, Z_ETA2, 1, tol=1e-12)
-    kw = dict(ds=0.01, ds_max=0.02, max_points=4, shooting="multiple", stick_events=False)
+    kw = dict(ds=0.01, ds_max=0.02, max_points=4, shooting="multiple", stick_events=False,
+              tol=1e-12)  # fmt: skip
     fixed = ssf.continue_orbit(orbit, "eta", (1.9, 2.1), **kw)
     branch = ssf.continue_orbit(orbit, "eta", (1.9, 2.1), remesh=True, **kw)
     assert meshes and branch.values.size == 4 and branch.values[-1] > 2.0, (meshes, branch)
@@ -366,7 +410,7 @@ def test_a_re_sampled_point_is_integrated_at_its_own_parameter():
 def test_re_meshing_reaches_orbits_that_the_fixed_mesh_cannot(monkeypatch):
     # The unstable side of Fig. 6's upper P1 fold from the orbit at multiplier 1.1e8, by
     # multiple shooting with the same start, bounds and settings, once on the mesh fixed
-    # at the start and once re-meshed. Scaled down to take 20 points instead of minutes
+    # at the start and once re-meshed. Scaled down to take 24 points instead of minutes
     # (with the default limits the fixed mesh from here is still going, at 3e15, after
     # 40 points and ~1 min; tol 1e-11, rtol 1e-13, ds 1e-6):
     # the start's mesh is refined only until no segment amplifies by more than 1e4
@@ -390,16 +434,16 @@ def test_re_meshing_reaches_orbits_that_the_fixed_mesh_cannot(monkeypatch):
 
     monkeypatch.setattr(multishoot_branch, "walk_pieces", spy)
     multi = unstable_orbit()
-    kw = dict(ds=3e-5, ds_max=1e-3, max_points=20, direction=-1, shooting="multiple",
+    kw = dict(ds=3e-5, ds_max=1e-3, max_points=24, direction=-1, shooting="multiple",
               tol=1e-12, rtol=1e-12, atol=1e-14, stick_events=False, sharp_ends=False)  # fmt: skip
     fixed = ssf.continue_orbit(multi, "eta", (3.3, 3.33), **kw)
     branch = ssf.continue_orbit(multi, "eta", (3.3, 3.33), remesh=True, **kw)
     mu_fixed = np.abs(fixed.multipliers[:, 0])
     mu = np.abs(branch.multipliers[:, 0])
-    # the fixed mesh ends short of max_points (measured: 17 points, eta = 3.3234741286,
-    # multiplier 1.5e13), the re-meshed branch does not (3.3234591398, 9.1e14)
-    assert fixed.status in ("precision-limit", "step-too-small") and fixed.values.size < 20
-    assert branch.status == "max-points" and branch.values.size == 20
+    # the fixed mesh ends short of max_points (measured: 21 points, eta = 3.3234769588,
+    # multiplier 7.2e12), the re-meshed branch does not (3.3234550959, 2.9e15)
+    assert fixed.status in ("precision-limit", "step-too-small") and fixed.values.size < 24
+    assert branch.status == "max-points" and branch.values.size == 24
     assert len(pieces[0]) == 1 and len(pieces[1]) >= 2  # the second one was re-meshed
     k = len(pieces[1][0].xs)  # up to the first re-mesh: the same calls, the same points
     np.testing.assert_array_equal(branch.values[:k], fixed.values[:k])
@@ -409,10 +453,10 @@ def test_re_meshing_reaches_orbits_that_the_fixed_mesh_cannot(monkeypatch):
 
     # The far point checked by another integrator: its segment starts, each integrated
     # by simulate (Rodas5P, the trajectory kernel, not the variational one) over its
-    # segment, join into a periodic orbit. Measured: 7.8e-13 (the corrector's tol is
-    # 1e-12 with the other kernel); the same starts at eta moved by 1e-10 leave gaps of
-    # 1.8e-11, with T moved by 1e-9 3.3e-11: the bound pins the orbit far below the
-    # 1.5e-5 in eta between the two ends.
+    # segment, join into a periodic orbit. Measured: 2.4e-13 (the corrector's tol is
+    # 1e-12 with the other kernel); at the end point of 2026-11-26, 7.8e-13, and the same
+    # starts at eta moved by 1e-10 left gaps of 1.8e-11, with T moved by 1e-9 3.3e-11:
+    # the bound pins the orbit far below the 2.2e-5 in eta between the two ends.
     last = pieces[1][-1]
     x = last.xs[-1]
     assert x[-1] == branch.values[-1]
@@ -429,9 +473,10 @@ def test_re_meshing_reaches_orbits_that_the_fixed_mesh_cannot(monkeypatch):
     assert max(gaps) < 1e-11
     # Its leading multiplier from central differences of simulate, segment by segment
     # (no variational equations), on the orbit cut finer (no segment amplifying more than
-    # 10: on the branch's own mesh the segment through the capture amplifies by 7e3 and
-    # differences of 1e-9 across it are not linear: they give 9.6e13), multiplied by the
-    # periodic QR scheme tested above. Measured: 9.0788e14 against 9.0716e14 (8e-4).
+    # 10: on the branch's own mesh the segment through the capture amplified by 7e3 at
+    # the end point of 2026-11-26, and differences of 1e-9 across it were not linear:
+    # they gave 9.6e13 for 9.07e14), multiplied by the periodic QR scheme tested above.
+    # Measured: 2.8901e15 against 2.8907e15 (2e-4; 30 segments).
     ms = MultiShooting(system, last.ms.mesh, 1e-12, 1e-14, 1e-12)
     fine = refine_mesh(ms, Y, T, limit=10.0)
     starts = []  # at the fine cuts, integrated from the start of the segment they cut

@@ -158,8 +158,8 @@ sharp_ends : bool
     computed them.
 shooting : {"single", "multiple", "auto"}
     "single": fixed points of the return map. "multiple": the orbit as ``segments``
-    segments (:mod:`.multishoot`; the arclength then measures all segment starts and
-    T, so ``ds`` means a longer step in the orbit than with single shooting; in-phase
+    segments (:mod:`.multishoot`; the arclength measures the segment starts, T over the
+    power of two nearest the first period, and the parameter, docs/orbits.md; in-phase
     orbits stay in phase and get their symmetry-breaking points too). "auto": single,
     and where it ends with "step-too-small" or "precision-limit", multiple shooting
     from its last point on (same direction in the parameter, the tightest stage's
