@@ -275,11 +275,9 @@ class _WalkCoordinates:
         self.scale = 2.0 ** -round(math.log2(abs(float(x0[-2]))))
         self.evaluate = self._wrap(evaluate)
         self.refine = [(self._wrap(ev), tol, ds_min) for ev, tol, ds_min in refine]
-        self.jump = None if jump is None else self._unscaled_jump(jump)
-        self.stop = None if stop is None else (lambda x, A, w: stop(self.from_walk(x), A, w))
-
-    def _unscaled_jump(self, jump):
-        return lambda a, b: jump(self.from_walk(a), self.from_walk(b))
+        unscale = self.from_walk
+        self.jump = None if jump is None else (lambda a, b: jump(unscale(a), unscale(b)))
+        self.stop = None if stop is None else (lambda x, A, w: stop(unscale(x), A, w))
 
     def to_walk(self, x: np.ndarray) -> np.ndarray:
         out = np.array(x, dtype=float)
