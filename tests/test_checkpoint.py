@@ -12,12 +12,12 @@ import textwrap
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.base import journal as jmod
+from stickslip_fast.base import threads as bthreads
 from stickslip_fast.base.journal import Journal, call_journaled, describe, journal
 
 # the stable period-1 orbit at eta = 3.3, k12 = -0.8 (tests/test_foldcurve_orbit.py)
@@ -258,7 +258,7 @@ def test_a_multiple_shooting_branch_resumes_bit_identically(fold_branch, tmp_pat
                                                             monkeypatch, caplog, threads):  # fmt: skip
     # on 3 threads the segments' calls reach the journal from the pool's workers, and the
     # interruption is raised in one of them
-    monkeypatch.setattr(numba, "get_num_threads", lambda: threads)
+    monkeypatch.setattr(bthreads, "numba_threads", lambda: threads)
     orbit, _, _ = fold_branch
     kw = dict(ds=2e-3, ds_max=5e-3, max_points=6, shooting="multiple", segments=3,
               stick_events=False, progress=False)  # fmt: skip

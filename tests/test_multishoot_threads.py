@@ -13,7 +13,6 @@ import signal
 import threading
 import time
 
-import numba
 import numpy as np
 import pytest
 
@@ -35,7 +34,7 @@ def orbit():
 def _threads(monkeypatch, n: int) -> list[str]:
     """Let segment_flows use ``n`` threads (whatever the cores), and record which
     threads integrate."""
-    monkeypatch.setattr(numba, "get_num_threads", lambda: n)
+    monkeypatch.setattr(bthreads, "numba_threads", lambda: n)
     names: list[str] = []
     real = MultiShooting.flow
 
@@ -53,15 +52,32 @@ def _evaluate(orbit, m: int):
     return ms.evaluate(ms.pack(Y, orbit.T))
 
 
+def _own_sigint(signum, frame):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("handler", ["python", "own"])
 @pytest.mark.parametrize("threads", [2, 3])
-def test_segments_on_threads_give_the_same_bits(orbit, monkeypatch, threads):
+def test_segments_on_threads_give_the_same_bits(orbit, monkeypatch, threads, handler):
+    # with a SIGINT handler of the caller's own, each call from the main thread runs in a
+    # worker thread (base/interrupt.py), which takes the caller's Numba thread count
+    old = signal.signal(
+        signal.SIGINT, _own_sigint if handler == "own" else signal.default_int_handler
+    )
+    try:
+        _same_bits_on_threads(orbit, monkeypatch, threads)
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _same_bits_on_threads(orbit, monkeypatch, threads):
     names = _threads(monkeypatch, 1)
     one = _evaluate(orbit, 7)
     branch_one = ssf.continue_orbit(orbit, "eta", (2.0, 2.1), shooting="multiple", segments=5,
                                     max_points=5, progress=False)  # fmt: skip
     assert set(names) == {"MainThread"}
     names.clear()
-    monkeypatch.setattr(numba, "get_num_threads", lambda: threads)
+    monkeypatch.setattr(bthreads, "numba_threads", lambda: threads)
     many = _evaluate(orbit, 7)
     branch_many = ssf.continue_orbit(orbit, "eta", (2.0, 2.1), shooting="multiple",
                                      segments=5, max_points=5, progress=False)  # fmt: skip
@@ -116,7 +132,7 @@ def test_a_segment_cut_short_is_not_recorded(tmp_path):
 
 
 def test_run_concurrently_keeps_order_errors_and_nesting(monkeypatch):
-    monkeypatch.setattr(numba, "get_num_threads", lambda: 3)
+    monkeypatch.setattr(bthreads, "numba_threads", lambda: 3)
     seen = []
 
     def call(k):
@@ -160,7 +176,7 @@ def test_a_fold_curve_is_the_same_on_one_thread_or_three(fold_point, monkeypatch
     monkeypatch.setattr(bthreads, "shared_pool", spy)
     curves = {}
     for n in (1, 3):
-        monkeypatch.setattr(numba, "get_num_threads", lambda n=n: n)
+        monkeypatch.setattr(bthreads, "numba_threads", lambda n=n: n)
         curves[n] = ssf.continue_bifurcation(branch, fold, "k12", (-0.95, -0.79), direction=-1,
                                              max_points=4, stick_events=False)  # fmt: skip
         assert bool(pools) is (n > 1)  # on threads only when there are

@@ -22,7 +22,15 @@ from typing import Any
 
 import numba
 
-__all__ = ["shared_pool", "in_worker", "thread_count", "submit", "finish", "run_concurrently"]
+__all__ = [
+    "shared_pool",
+    "in_worker",
+    "numba_threads",
+    "thread_count",
+    "submit",
+    "finish",
+    "run_concurrently",
+]
 
 _PREFIX = "stickslip-worker"
 _POOLS: dict[tuple[int, int], ThreadPoolExecutor] = {}
@@ -44,10 +52,16 @@ def in_worker() -> bool:
     return threading.current_thread().name.startswith(_PREFIX)
 
 
+def numba_threads() -> int:
+    """Numba's thread count in the calling thread (the pools' size; tests set it here
+    rather than patching ``numba.get_num_threads``, which the kernels' callers use too)."""
+    return numba.get_num_threads()
+
+
 def thread_count(tasks: int) -> int:
     """Threads for ``tasks`` independent tasks: Numba's thread count, at most one per
     task, and 1 inside a pool's worker (which must not wait on the pool)."""
-    return 1 if in_worker() else max(1, min(int(tasks), numba.get_num_threads()))
+    return 1 if in_worker() else max(1, min(int(tasks), numba_threads()))
 
 
 def submit(pool: ThreadPoolExecutor, fn: Callable[..., Any], *args: Any) -> Future:
