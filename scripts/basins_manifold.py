@@ -13,7 +13,8 @@ Steps (all by default; results printed, files under out/basins/):
    eta = 9.73102 by Newton next to the stable P2 (see ``p2_saddle``; cached in
    out/basins/p2_saddle.json); its map, refinement, edge check and manifold as in 1
    -> out/basins/asym_p2_saddle.h5.
-3. ``wada``: the grid Wada test of every map in out/basins with three or more basins.
+3. ``wada``: the grid and merging Wada tests of every map in out/basins with three or
+   more basins.
 
 Usage: ``python3 scripts/basins_manifold.py [fold] [p2] [wada]``.
 """
@@ -127,10 +128,11 @@ def study(orb: ssf.Orbit, path: Path, segments: int = 60, **trace) -> None:
 def wada() -> None:
     for f in sorted(glob.glob(str(OUT / "**/*.h5"), recursive=True)):
         r = ssf.load_basins(f)
-        w = r.wada()
+        w, wm = r.wada(), r.wada_merge()
         print(f"{f}: {r.shape}, {w.n_basins} basins, fractions "
               f"{ {k: round(v, 3) for k, v in r.fractions().items()} }, Wada fraction at "
-              f"r = 1..5: {np.round(w.fraction, 3).tolist()}, wada = {w.is_wada}")  # fmt: skip
+              f"r = 1..5: {np.round(w.fraction, 3).tolist()}, wada = {w.is_wada}; merging "
+              f"test, uncovered: {np.round(wm.uncovered, 3).tolist()}, wada = {wm.is_wada}")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -122,6 +122,55 @@ def test_wada_test_tells_newton_basins_from_sectors():
     assert not w.is_wada and w.fraction[-1] < 0.05  # only cells near the centre
 
 
+def _newton_z3(n):
+    g = np.linspace(-1.5, 1.5, n)
+    z = g[:, None] + 1j * g[None, :] + 1e-9
+    for _ in range(40):
+        z = z - (z**3 - 1) / (3 * z**2)
+    roots = np.exp(2j * np.pi * np.arange(3) / 3)
+    return np.argmin(np.abs(z[..., None] - roots), axis=-1)
+
+
+def test_merging_test_tells_newton_basins_from_sectors_and_stripes():
+    # Newton's basins for z^3 = 1 are Wada: the merged boundaries cover each other at the
+    # same small r whatever the resolution (Daza et al. 2018's check)
+    for n, first in ((150, 2), (300, 2), (600, 2)):
+        w = bm.wada_merge_test(_newton_z3(n), r_max=5)
+        assert w.n_basins == 3 and w.is_wada
+        assert np.argmax(w.uncovered <= 0.01) + 1 == first  # measured 0.0031 / 0.0034 / 0.0028
+        assert w.uncovered[3] <= 1e-3 and w.uncovered[0] > 0.01  # measured 0.0236 / 0.0195 / 0.0168
+    # three sectors meeting at one point: basin i's merged boundary (its two rays) shares
+    # one ray with basin j's, so about half of it is far from j's at any small r
+    x, y = np.meshgrid(np.linspace(-1, 1, 300), np.linspace(-1, 1, 300), indexing="ij")
+    sectors = ((np.arctan2(y, x) + np.pi) / (2 * np.pi) * 3).astype(int) % 3
+    w = bm.wada_merge_test(sectors, r_max=5)
+    assert not w.is_wada and np.all(w.uncovered > 0.5)  # measured 0.58-0.60
+    # three stripes 100 cells wide: the outer basins' boundaries are 100 cells apart
+    stripes = np.repeat(np.arange(3), 100)[:, None] * np.ones(300, dtype=int)[None, :]
+    w = bm.wada_merge_test(stripes, r_max=5)
+    assert not w.is_wada and np.all(w.uncovered == 1.0)
+    # two basins: both merged maps are the same map, their boundaries the same cells
+    w = bm.wada_merge_test(stripes.clip(0, 1), r_max=2)
+    assert w.n_basins == 2 and not w.is_wada and np.all(w.uncovered == 0.0)
+    assert np.all(np.isnan(bm.wada_merge_test(np.zeros((5, 5), dtype=int)).uncovered))
+
+
+def test_merging_test_leaves_failed_cells_out_of_every_boundary():
+    lab = _newton_z3(150)
+    ref = bm.wada_merge_test(lab)
+    # a failed cell inside a basin is on no merged boundary: were it, it would sit on
+    # every basin's boundary at once and pass for a Wada point
+    holes = lab.copy()
+    far = np.argwhere(bm.boundary_cells(lab) == 0)[::97]
+    holes[tuple(far.T)] = -1
+    for i in range(3):
+        assert not np.any(bm._merged_boundary(holes, i)[tuple(far.T)])
+    stripes = np.repeat(np.arange(3), 50)[:, None] * np.ones(150, dtype=int)[None, :]
+    stripes[25, 75] = stripes[125, 75] = -1  # inside the outer basins
+    assert np.all(bm.wada_merge_test(stripes).uncovered == 1.0)
+    assert ref.is_wada and bm.wada_merge_test(holes).is_wada
+
+
 def test_boundary_pairs_and_cells():
     lab = np.array([[0, 0, 1], [0, 2, 1], [-1, 2, 2]])
     pairs = bm.boundary_pairs(lab)
@@ -181,6 +230,9 @@ def test_identical_across_threads_chunks_file_and_resume(ref, tmp_path):
         full = {k: h5[k][...] for k in RAW}
         np.testing.assert_array_equal(h5["basins/label"][...], ref.labels)
         assert h5["basins"].attrs["basin_entropy"] == ref.measures()["basin_entropy"]
+        assert h5["basins"].attrs["wada_merge"] == ref.measures()["wada_merge"]
+        np.testing.assert_array_equal(h5["basins/wada_merge_uncovered"][...],
+                                      ref.wada_merge().uncovered)  # fmt: skip
     # lose half the runs (as a kill does) and the /basins group, then resume
     with h5py.File(tmp_path / "a.h5", "r+") as h5:
         h5["done"][0, 30:] = 0
@@ -255,6 +307,7 @@ def test_cli_basins_and_info(tmp_path, capsys, ref):
     assert main(["info", str(tmp_path / "b.h5")]) == 0
     out = capsys.readouterr().out
     assert "(basins)" in out and "equilibrium" in out and "S_b" in out
+    assert "Wada: grid test no, merging test no" in out  # two basins: neither applies
     cfg.write_text(cfg.read_text() + "colour = 1\n")
     assert main(["basins", str(cfg), "-o", str(tmp_path / "c.h5")]) == 2
     assert "colour" in capsys.readouterr().err

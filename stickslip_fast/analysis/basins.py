@@ -215,6 +215,10 @@ class BasinsResult:
         """Grid Wada test (meaningful with three or more basins)."""
         return bm.wada_grid_test(self.labels, r_max=r_max)
 
+    def wada_merge(self, r_max: int = 5) -> bm.WadaMergeTest:
+        """Merging Wada test (Daza et al. 2018; meaningful with three or more basins)."""
+        return bm.wada_merge_test(self.labels, r_max=r_max)
+
     def measures(self) -> dict[str, Any]:
         """Every scalar measure, as stored in the file's /basins attributes."""
         ue = self.uncertainty_exponent()
@@ -231,6 +235,7 @@ class BasinsResult:
             "boundary_dimension": ue.dimension,
             "n_basins": w.n_basins,
             "wada": int(w.is_wada),
+            "wada_merge": int(self.wada_merge().is_wada),
             "failed_fraction": float(np.mean(self.labels < 0)),
         }  # fmt: skip
 

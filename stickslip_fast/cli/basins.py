@@ -162,7 +162,8 @@ def basins_report(path: Any) -> str:
         f"measures:  S_b = {m['basin_entropy']:.4f}, S_bb = {m['boundary_basin_entropy']:.4f} "
         f"(box {m['entropy_box']}), uncertainty exponent {m['uncertainty_exponent']:.3f} +- "
         f"{m['uncertainty_exponent_stderr']:.3f} (boundary dimension "
-        f"{m['boundary_dimension']:.3f}), Wada: {'yes' if m['wada'] else 'no'}"
+        f"{m['boundary_dimension']:.3f}), Wada: grid test {'yes' if m['wada'] else 'no'}, "
+        f"merging test {'yes' if m['wada_merge'] else 'no'}"
     )
     if r.boundary is not None:
         bd = r.boundary

@@ -10,7 +10,8 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
     /basins                    attrs: axis_names (JSON), eta, entropy_box, and the
                                measures: basin_entropy, boundary_basin_entropy,
                                boundary_box_fraction, uncertainty_exponent(_stderr),
-                               boundary_dimension, n_basins, wada, failed_fraction
+                               boundary_dimension, n_basins, wada, wada_merge,
+                               failed_fraction
       u (n1), v (n2)           coordinates along the two axes (attrs long_name)
       state (S)                state names
       label (u, v)       i4    attractor id per cell (-1: failed)
@@ -21,6 +22,9 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
       points (attractor, orbit_point, state)   as the census's /attractors/points
       k (K); eps (k); uncertain_fraction (k)   the uncertainty exponent's data
       radius (R); wada_fraction (radius)       the grid Wada test
+      wada_merge_uncovered (radius)            the merging Wada test (absent from files
+                                               finished before 2026-12-01; a re-run
+                                               rewrites /basins with it)
       boundary/                (optional) refined boundary segments: segment scale;
                                u, v (the refined point), u_a, v_a, u_b, v_b (the
                                final bracket), label_a, label_b, status
@@ -109,6 +113,7 @@ def write_basins(path: str | Path, result: Any, kinds: tuple[str, ...]) -> None:
     fr = result.fractions(stderr=True)
     ue = result.uncertainty_exponent()
     w = result.wada()
+    wm = result.wada_merge()
     atts = result.attractors
     n = result.system.n_state
     width = max([1, *(len(a.points) for a in atts)])
@@ -163,6 +168,8 @@ def write_basins(path: str | Path, result: Any, kinds: tuple[str, ...]) -> None:
         _put(g, "uncertain_fraction", ue.f, ("k",), "share of cell pairs with different labels")
         _put(g, "wada_fraction", w.fraction, ("radius",),
              "share of boundary cells whose neighbourhood holds every basin")  # fmt: skip
+        _put(g, "wada_merge_uncovered", wm.uncovered, ("radius",),
+             "largest share of one basin's boundary farther than radius from another's")  # fmt: skip
         h5.flush()
 
 
