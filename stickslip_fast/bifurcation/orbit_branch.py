@@ -149,13 +149,12 @@ stick_events : bool
     branch to 1e-8 in the parameter) as a "stick-phase" bifurcation.
 sharp_ends : bool
     Where the corrector fails at ``ds_min``, go on with the tighter
-    settings of :data:`SHARP_END_STAGES` in turn (corrector tolerance,
-    integration tolerances, smallest step; each only where tighter than the
-    ones given), from the last point corrected again with them. This passes
-    folds narrower than the defaults resolve, e.g. both ends of Fig. 6's
-    period-1 branch (docs/limits.md). The branch keeps the tighter settings
-    from there on; ``T`` and the points are those of the stage that
-    computed them.
+    settings of :data:`SHARP_END_STAGES` in turn (corrector tolerance, integration
+    tolerances, smallest step; each only where tighter than the ones given), from the
+    last point corrected again with them. This passes folds narrower than the
+    defaults resolve, e.g. both ends of Fig. 6's period-1 branch (docs/limits.md).
+    The branch keeps the tighter settings from there on; ``T`` and the points are
+    those of the stage that computed them.
 shooting : {"single", "multiple", "auto"}
     "single": fixed points of the return map. "multiple": the orbit as ``segments``
     segments (:mod:`.multishoot`; the arclength measures the segment starts, T over the
@@ -181,11 +180,12 @@ remesh : bool
     least :data:`MS_TOL_FLOOR` (its residual carries the segments'
     integration error).
 max_segments : int
-    Multiple shooting only: the most segments a mesh gets, at the start
-    (where a segment amplifies by more than ``MESH_LIMIT``) and in each
-    re-mesh; an integer >= ``segments``. The far ends of re-meshed branches
-    stop where the cap is reached (μ ~ 1e36-1e48 at the default 64; 256
-    reached μ = 6.2e178 at about 4x the cost per point; docs/orbits.md).
+    Multiple shooting only: the most segments a mesh gets, at the start (where a
+    segment amplifies by more than ``MESH_LIMIT``) and in each re-mesh; an integer
+    >= ``segments``. The far ends of re-meshed branches stop at the cap (μ ~
+    1e36-1e48 at the default 64; 256 reached μ = 6.2e178 at ~4x the cost per point).
+    ``max_segments=segments`` (even cuts only) keeps single shooting's pace on long
+    walks of moderate multipliers; refined cuts locate bifurcations more precisely.
 progress : bool, optional
     Show a progress bar of the points, with the parameter's value (default:
     when standard error is a terminal).
