@@ -283,6 +283,39 @@ def test_in_phase_and_anti_phase_motion_coexist_at_eta_3():
     assert 0.02 < in_phase[0].fraction < 0.15  # measured 0.049 (0.070 on 25 x 25 cells)
 
 
+def test_even_cuts_keep_single_shooting_s_pace_on_two_disks():
+    # benchmarks/ms_mesh.py: the default mesh is refined where a segment amplifies by more
+    # than 10, which cuts the orbit where the slip starts to grow out of the stick phase
+    # (0.5-100 eps), and there Newton's reach is short: eta 3 -> 5 takes 87 points against
+    # single shooting's 44. The 8 even cuts (max_segments=8) have no cut there (6 of 8 lie
+    # deeper in the stick phase) and keep single shooting's pace.
+    from stickslip_fast.bifurcation.stickphases import slip_velocity
+
+    orbit = _in_phase_orbit(_sym(2, 3.0))
+    system = orbit.system
+
+    def cut_slips(mesh_starts):
+        starts = np.asarray(mesh_starts[1])
+        return (
+            np.min([np.hypot(*slip_velocity(system, starts, i)) for i in range(2)], axis=0)
+            / system.eps
+        )
+
+    refined = ssf.find_orbit(system, orbit.points[0], 1, shooting="multiple")
+    in_breakaway = (cut_slips(refined.segments) > 0.5) & (cut_slips(refined.segments) < 100)
+    assert refined.converged and in_breakaway.sum() >= 5  # measured 14 of 24 cuts
+    kw = dict(progress=False, stick_events=False)
+    single = ssf.continue_orbit(orbit, "eta", (3.0, 4.0), **kw)
+    even = ssf.continue_orbit(orbit, "eta", (3.0, 4.0), shooting="multiple", max_segments=8, **kw)
+    slips = cut_slips(even.segments[0])
+    assert len(slips) == 8 and not np.any((slips > 0.5) & (slips < 100))
+    assert single.status == even.status == "bounds", (single.status, even.status)
+    # measured 25 points against 24
+    assert even.values.size <= 1.25 * single.values.size, (even.values.size, single.values.size)
+    assert abs(even.T[-1] - single.T[-1]) < 1e-8
+    np.testing.assert_allclose(even.points[-1], single.points[-1], rtol=0, atol=1e-9)
+
+
 def test_multiple_shooting_marks_the_symmetry_breaking_point():
     # the same point as test_continuation_marks_the_symmetry_breaking_point, by multiple
     # shooting (8 segments): the walk is projected onto the in-phase starts and the test
