@@ -149,6 +149,10 @@ def test_merging_test_tells_newton_basins_from_sectors_and_stripes():
     stripes = np.repeat(np.arange(3), 100)[:, None] * np.ones(300, dtype=int)[None, :]
     w = bm.wada_merge_test(stripes, r_max=5)
     assert not w.is_wada and np.all(w.uncovered == 1.0)
+    # the map's edge is no boundary, whatever the labels' integer type
+    assert np.array_equal(
+        bm.wada_merge_test(stripes.astype(np.uint8), r_max=5).uncovered, w.uncovered
+    )
     # two basins: both merged maps are the same map, their boundaries the same cells
     w = bm.wada_merge_test(stripes.clip(0, 1), r_max=2)
     assert w.n_basins == 2 and not w.is_wada and np.all(w.uncovered == 0.0)

@@ -393,7 +393,7 @@ class WadaMergeTest:
 def _merged_boundary(lab: np.ndarray, basin: int) -> np.ndarray:
     """Cells of the two-colour map (``basin`` against all other basins) with a cell of
     the other colour among their 8 neighbours; failed cells (< 0) take no side."""
-    side = np.where(lab < 0, -1, (lab == basin).astype(lab.dtype))
+    side = np.where(lab < 0, -1, lab == basin).astype(np.int8)  # signed, whatever lab is
     pad = np.pad(side, 1, constant_values=-1)
     n1, n2 = lab.shape
     out = np.zeros(lab.shape, dtype=bool)
