@@ -153,6 +153,15 @@ def test_merging_test_tells_newton_basins_from_sectors_and_stripes():
     assert np.array_equal(
         bm.wada_merge_test(stripes.astype(np.uint8), r_max=5).uncovered, w.uncovered
     )
+    # repeating stripes 0, 1, 2, 0, ... of 3-5 cells: never Wada (each boundary is two
+    # basins' only). Fattened by 5 cells the merged boundaries cover each other, so the
+    # verdict takes r <= 2, the two-cell thickness of a boundary on the grid; the grid
+    # test's verdict, up to its r_max = 5, calls the 3- and 4-cell stripes Wada
+    for width in (3, 4, 5):
+        thin = np.tile(np.repeat(np.arange(3), width), 10)[:, None] * np.ones(60, dtype=int)
+        w = bm.wada_merge_test(thin)
+        assert not w.is_wada and w.uncovered[4] == 0.0 and w.uncovered[1] > 0.02
+        assert bm.wada_grid_test(thin).is_wada is (width < 5)  # measured 0.966-1 at r = 5
     # two basins: both merged maps are the same map, their boundaries the same cells
     w = bm.wada_merge_test(stripes.clip(0, 1), r_max=2)
     assert w.n_basins == 2 and not w.is_wada and np.all(w.uncovered == 0.0)
