@@ -49,6 +49,37 @@ def _sigint_soon(delay: float = 0.3) -> threading.Timer:
     return timer
 
 
+@numba.njit(nogil=True)
+def _spin_then_array(limit, abort):
+    """As :func:`_spin_until_aborted`, returning a tuple of arrays (as the variational
+    kernels do): Numba boxes it with a callback into Python (``_numba_unpickle``)."""
+    i = 0
+    while i < limit and poll_flag(abort) == 0:
+        i += 1
+    return i, np.full(3, float(i)), np.ones((3, 2)), 0.5
+
+
+def _python_wrapper(limit, abort):
+    # a kernel called from Python code (as variational.propagate_tangents calls
+    # propagate_sensitivity): one more SystemError in the chain
+    return _spin_then_array(limit, abort)
+
+
+@pytest.mark.parametrize("kernel", [_spin_then_array, _python_wrapper])
+def test_ctrl_c_during_a_kernel_that_returns_arrays_is_a_keyboard_interrupt(default_sigint, kernel):
+    # SIGINT's handler runs at the first Python code after the kernel stops: inside the
+    # boxing of its result, which the dispatcher reported as a SystemError (Ctrl-C in
+    # plane_crossings, find_orbit, continue_orbit ... did before 2026-12-01)
+    _spin_then_array(10, interrupt.new_abort_flag())  # compiled
+    flag = interrupt.new_abort_flag()
+    timer = _sigint_soon()
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.call_interruptible(kernel, _LIMIT, abort=flag)
+    timer.join()
+    assert flag[0] == 1 and time.perf_counter() - start < 1.5
+
+
 def _which_thread(abort):
     return threading.get_ident()
 

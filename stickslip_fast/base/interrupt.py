@@ -124,13 +124,33 @@ def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray
             outer = watcher.armed
             watcher.armed = abort
             try:
-                return kernel(*args, abort)
+                return _call_here(kernel, args, abort)
             finally:
                 watcher.armed = outer
                 if outer is None:
                     signal.set_wakeup_fd(-1)
         signal.set_wakeup_fd(previous)  # someone else's (an asyncio loop): keep it
     return _call_in_worker(kernel, args, abort)
+
+
+def _call_here(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) -> Any:
+    """``kernel(*args, abort)`` in the calling (main) thread, Ctrl-C raised as itself.
+
+    SIGINT's handler runs at the first Python code after the kernel stops; where that is
+    Numba boxing the kernel's result (its arrays' dtypes come from a Python callback,
+    ``_numba_unpickle``), the dispatcher reports the KeyboardInterrupt as the cause of a
+    SystemError ("returned a result with an exception set"). It is re-raised as the
+    KeyboardInterrupt it is.
+    """
+    try:
+        return kernel(*args, abort)
+    except SystemError as exc:
+        cause = exc.__cause__
+        while isinstance(cause, SystemError):  # one per Python frame between them
+            cause = cause.__cause__
+        if isinstance(cause, KeyboardInterrupt):
+            raise KeyboardInterrupt from None
+        raise
 
 
 def _call_in_worker(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) -> Any:
