@@ -13,6 +13,9 @@ find_orbit compiles the orbit kernels when their cache is cold (222 s on the loa
 2-core VM).
 """
 
+import os
+import signal
+
 import numpy as np
 import pytest
 
@@ -137,6 +140,61 @@ def test_plane_crossings_equal_the_return_map(fold_saddle):
     st, pts, _, _ = return_map(fold_saddle.system, z, 3, tangents=False)
     assert st == "ok"
     np.testing.assert_array_equal(plane_crossings(fold_saddle.system, z, 3)[0], pts[:, [0, 2, 3]])
+
+
+def test_plane_crossings_are_the_same_on_any_thread_count(fold_saddle, monkeypatch):
+    # the states are independent and run side by side (run_concurrently): each is the
+    # same sequential integration on any thread, so the bits do not depend on the threads
+    import threading
+
+    from stickslip_fast.base import threads as bthreads
+    from stickslip_fast.bifurcation import stable_manifold as sm
+
+    g = np.linspace(-0.3, 0.3, 4)
+    uu, vv = np.meshgrid(g, g, indexing="ij")
+    states = np.stack([uu.ravel(), 0 * uu.ravel(), vv.ravel(), 0 * uu.ravel()], axis=1)
+    states[5, 0] = np.nan  # a failed start: its row stays NaN, the others go on
+    names = []
+    real = sm.call_journaled
+
+    def spy(*args, **kw):
+        names.append(threading.current_thread().name)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(sm, "call_journaled", spy)
+    out = {}
+    for n in (1, 3):
+        monkeypatch.setattr(bthreads, "numba_threads", lambda n=n: n)
+        out[n] = sm.plane_crossings(fold_saddle.system, states, 4)
+    assert any(name.startswith("stickslip-worker") for name in names)
+    np.testing.assert_array_equal(out[1], out[3])
+    assert np.all(np.isnan(out[1][5])) and np.isfinite(np.delete(out[1], 5, axis=0)).all()
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
+def test_ctrl_c_stops_the_plane_crossings_on_every_thread(fold_saddle, monkeypatch):
+    import threading
+    import time
+
+    from stickslip_fast.base import threads as bthreads
+    from stickslip_fast.bifurcation.stable_manifold import plane_crossings
+
+    monkeypatch.setattr(bthreads, "numba_threads", lambda: 2)
+    states = np.tile([[0.05, 0.0, 0.1, 0.0]], (4, 1)) + 1e-3 * np.arange(4)[:, None]
+    s = fold_saddle.system
+    plane_crossings(s, states, 2)  # warm
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+        start = time.perf_counter()
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            plane_crossings(s, states, 4000)  # ~4 x 1000 crossings: many seconds in all
+        elapsed = time.perf_counter() - start
+        timer.join()
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert elapsed < 1.5, elapsed
 
 
 def test_model_curve_lands_on_the_saddle_and_separates_two_basins(fold_saddle, tmp_path):

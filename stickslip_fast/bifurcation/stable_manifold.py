@@ -8,6 +8,7 @@ plane start as it is, then crossing to crossing on the section). See docs/basins
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from typing import Any
@@ -17,6 +18,7 @@ import numpy as np
 from ..analysis.basins_manifold import StableManifold, local_saddles, trace_manifold
 from ..base.interrupt import new_abort_flag
 from ..base.journal import call_journaled, journal
+from ..base.threads import run_concurrently
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
 from ..core.variational import propagate_tangents
@@ -49,6 +51,13 @@ def plane_crossings(
     ndarray (m, n, n_state - 1)
         The crossings in section coordinates (the state without dx1); NaN from
         a failed integration on.
+
+    Notes
+    -----
+    The states are independent, so they run side by side on Numba's thread count
+    (:func:`~stickslip_fast.base.threads.run_concurrently`); each is the same
+    sequential integration on any thread, so the result does not depend on the
+    threads.
     """
     st = np.atleast_2d(np.asarray(states, dtype=float))
     p_arr = system.to_array()
@@ -56,20 +65,28 @@ def plane_crossings(
     mask = np.arange(system.n_state) != SECTION_INDEX
     out = np.full((len(st), int(n), int(mask.sum())), np.nan)
     U = np.ascontiguousarray(np.eye(system.n_state)[:, :1])
-    for i, y0 in enumerate(st):
-        y = np.array(y0, dtype=float)
+    # one flag for every state: Ctrl-C during a call in the calling thread (which arms
+    # it) stops the states running in workers too, within a step
+    abort = new_abort_flag()
+
+    def crossings_from(i: int) -> None:  # row i of out, and nothing else
+        y = np.array(st[i], dtype=float)
         for k in range(int(n)):
+            if abort[0]:
+                return
             if k:
                 y[SECTION_INDEX] = 0.0  # on the section: no crossing at t = 0
             code, y1, _, t = call_journaled(
                 propagate_tangents, y, U.copy(), p_arr, system.n_oscillators,
                 system.is_dc_motor, variant, float(t_max), 1, float(rtol), float(atol),
-                _TANGENT_ATOL, _MAX_STEPS, abort=new_abort_flag(),
+                _TANGENT_ATOL, _MAX_STEPS, abort=abort,
             )  # fmt: skip
             if STATUS_NAMES[code] != "ok" or not math.isfinite(t) or not np.all(np.isfinite(y1)):
-                break
+                return
             out[i, k] = y1[mask]
             y = np.ascontiguousarray(y1)
+
+    run_concurrently([functools.partial(crossings_from, i) for i in range(len(st))])
     return out
 
 
