@@ -142,6 +142,33 @@ def test_ctrl_c_stops_compiled_work_promptly(what, tmp_path):
     assert waited < 10.0, waited  # within about a second on a quiet machine
 
 
+_LONG_ORBIT = """
+import stickslip_fast as ssf
+s = ssf.System.preset("asymmetric", eta=2.0)
+o = ssf.find_orbit(s, ssf.simulate(s, 3000, 2000))  # compiled and warm
+print("running", flush=True)
+ssf.find_orbit(s, o.points[0], period=10**7)  # one kernel call of 10**7 crossings
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
+def test_ctrl_c_stops_an_orbit_kernel_with_keyboard_interrupt():
+    # the orbit kernels return arrays: SIGINT's handler then runs inside Numba's boxing of
+    # the result, which surfaced as SystemError until 2026-12-01 (base/interrupt.py)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _LONG_ORBIT], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, preexec_fn=_default_sigint,
+    )  # fmt: skip
+    assert proc.stdout.readline().strip() == "running"
+    time.sleep(1.0)
+    assert proc.poll() is None
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert "KeyboardInterrupt" in err and "SystemError" not in err, err[-2000:]
+    assert time.perf_counter() - sent < 10.0
+
+
 @pytest.mark.skipif(os.name != "posix", reason="SIGINT delivery")
 def test_ctrl_c_on_cli_simulate_says_interrupted_and_exits_130():
     proc = subprocess.Popen(
