@@ -265,6 +265,37 @@ def test_identical_across_threads_chunks_file_and_resume(ref, tmp_path):
         ssf.basins(S32, (G1, G2), plane=("x1", "dx1"), out=tmp_path / "a.h5", **KW)
 
 
+def test_writing_a_map_runs_each_test_once_and_stores_what_measures_gives(
+    ref, tmp_path, monkeypatch
+):
+    # the Wada tests take about a second each on a 1000 x 1000 map; write_basins ran each
+    # twice (once in measures(), once for its arrays) until 2026-12-02
+    import dataclasses
+
+    from stickslip_fast.analysis import basins as basins_mod
+    from stickslip_fast.io.basins import write_basins
+
+    a = ssf.basins(S32, (G1, G2), out=tmp_path / "a.h5", **KW)
+    calls = []
+    for name in ("wada_grid_test", "wada_merge_test", "uncertainty_exponent"):
+        real = getattr(bm, name)
+        monkeypatch.setattr(
+            bm, name, lambda *x, _f=real, _n=name, **k: calls.append(_n) or _f(*x, **k)
+        )
+    # three basins, so that both Wada tests have a boundary of every pair to compare
+    three = dataclasses.replace(a, labels=np.arange(72).reshape(8, 9) % 3)
+    write_basins(tmp_path / "a.h5", three, basins_mod.KINDS)
+    assert sorted(calls) == ["uncertainty_exponent", "wada_grid_test", "wada_merge_test"]
+    tests = three.tests()
+    np.testing.assert_equal(three.measures(tests), three.measures())  # NaN == NaN here
+    with h5py.File(tmp_path / "a.h5", "r") as h5:
+        g = h5["basins"]
+        np.testing.assert_equal({k: g.attrs[k] for k in three.measures()}, three.measures())
+        np.testing.assert_array_equal(g["wada_fraction"][...], tests.wada.fraction)
+        np.testing.assert_array_equal(g["wada_merge_uncovered"][...], tests.wada_merge.uncovered)
+        np.testing.assert_array_equal(g["uncertain_fraction"][...], tests.uncertainty.f)
+
+
 def test_refined_boundary_brackets_straddle_the_boundary(ref):
     b = refine_boundary(ref, tol=1e-4, max_segments=6, store=False)
     assert b.n_pairs == len(bm.boundary_pairs(ref.labels)) and len(b.u) == 6

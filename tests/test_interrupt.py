@@ -184,3 +184,66 @@ def test_errors_reach_the_caller_either_way(default_sigint):
         signal.signal(signal.SIGINT, old)
     assert signal.set_wakeup_fd(-1) == -1
     np.testing.assert_array_equal(interrupt.new_abort_flag(), [0])
+
+
+def _swallow_sigint_then_spin(limit, abort):
+    """SIGINT whose KeyboardInterrupt is lost on the way, as in a cold compile: Python's
+    handler raised it inside a finaliser, where Python only prints it and goes on. The
+    watcher has set the flag all the same, so the kernel that follows stops at once."""
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(5.0)  # the handler raises here, or as os.kill returns
+    except KeyboardInterrupt:
+        pass  # a __del__ would print "Exception ignored in ..." and carry on
+    deadline = time.monotonic() + 5.0
+    while not abort[0] and time.monotonic() < deadline:
+        time.sleep(0.001)  # the watcher thread sets the flag asynchronously
+    return _spin_until_aborted(limit, abort)
+
+
+def _swallow_sigint_then_fail(limit, abort):
+    _swallow_sigint_then_spin(0, abort)
+    raise RuntimeError("no compiled object yet for <Library 'drive'>")
+
+
+def test_a_sigint_lost_in_a_finaliser_still_interrupts_the_call(default_sigint):
+    # the kernel stopped on the flag and returned normally (its runs marked
+    # "interrupted"): that result must not come back as the call's answer (a sweep
+    # would have stored it as finished values; the CLI exited 0). Before 2026-12-02
+    # call_interruptible returned it
+    _spin_until_aborted(10, interrupt.new_abort_flag())
+    flag = interrupt.new_abort_flag()
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.call_interruptible(_swallow_sigint_then_spin, _LIMIT, abort=flag)
+    assert flag[0] == 1 and time.perf_counter() - start < 5.0
+    assert signal.set_wakeup_fd(-1) == -1
+
+
+def test_an_error_after_a_lost_sigint_is_raised_as_keyboard_interrupt(default_sigint):
+    # Ctrl-C inside Numba's compiler can leave it half done; the error that follows is
+    # the interruption's, and it is kept as the cause
+    flag = interrupt.new_abort_flag()
+    with pytest.raises(KeyboardInterrupt) as info:
+        interrupt.call_interruptible(_swallow_sigint_then_fail, _LIMIT, abort=flag)
+    assert isinstance(info.value.__cause__, RuntimeError)
+    assert flag[0] == 1
+
+
+def test_a_worker_threads_call_cut_short_by_the_flag_raises():
+    # a worker of the caller's (run_concurrently) shares the flag the calling thread
+    # armed; once it is set, a result the flag cut short is not an answer there either
+    flag = interrupt.new_abort_flag()
+    flag[0] = 1
+    out = {}
+
+    def worker():
+        try:
+            out["value"] = interrupt.call_interruptible(_spin_until_aborted, _LIMIT, abort=flag)
+        except KeyboardInterrupt:
+            out["raised"] = True
+
+    t = threading.Thread(target=worker)
+    t.start()
+    t.join()
+    assert out == {"raised": True}

@@ -414,3 +414,35 @@ def test_info_describes_a_trajectory_file(tmp_path, capsys):
     assert "single run" in text and f"status {one.status}, period {period}" in text
     assert f"{one.n_steps} steps" in text and f"{len(one.t_poincare)} Poincare points" in text
     assert "201 samples every 1" in text and "x1, dx1, phi1, dphi1" in text
+
+
+def test_an_error_caused_by_ctrl_c_exits_130_as_interrupted(tmp_path, capsys, monkeypatch):
+    # Ctrl-C inside Numba's compiler can leave it half done, and the error that follows
+    # (a RuntimeError from its cache, seen on a cold CLI simulate) has the
+    # KeyboardInterrupt in its context: that is an interruption (130), not a crash (1)
+    from stickslip_fast.cli import commands
+
+    def interrupted_compile(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise RuntimeError("no compiled object yet for <Library 'w_solve'>")  # noqa: B904
+
+    def plain_bug(args):
+        raise RuntimeError("a bug")
+
+    def bad_value(args):
+        try:
+            raise KeyError("eta")
+        except KeyError as exc:
+            raise ValueError("bad field 'eta'") from exc
+
+    monkeypatch.setattr(commands, "_cmd_simulate", interrupted_compile)
+    assert main(["simulate", "--t-end", "300"]) == 130
+    assert capsys.readouterr().err.strip() == "stickslip-fast: interrupted"
+    monkeypatch.setattr(commands, "_cmd_simulate", plain_bug)
+    with pytest.raises(RuntimeError, match="a bug"):
+        main(["simulate", "--t-end", "300"])
+    monkeypatch.setattr(commands, "_cmd_simulate", bad_value)
+    assert main(["simulate", "--t-end", "300"]) == 2
+    assert "bad field 'eta'" in capsys.readouterr().err

@@ -109,11 +109,15 @@ def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray
     Raises
     ------
     KeyboardInterrupt
-        After the kernel has stopped, when Ctrl-C arrived while it ran.
+        After the kernel has stopped, when Ctrl-C arrived while it ran: also when the
+        ``KeyboardInterrupt`` that Python's handler raised was lost on the way (raised in
+        a finaliser during a cold compile, which Python only prints), and in place of
+        an error the interrupted call raised (chained to it as the cause). A result cut
+        short by the flag is never returned as the call's answer.
     """
     if threading.current_thread() is not threading.main_thread():
         # signals only reach the main thread: nothing to wait for here
-        return kernel(*args, abort)
+        return _checked(kernel(*args, abort), abort)
     if _getsignal(signal.SIGINT) is signal.default_int_handler:
         watcher = _sigint_watcher()
         fd = watcher.writer.fileno()
@@ -124,13 +128,24 @@ def call_interruptible(kernel: Callable[..., Any], *args: Any, abort: np.ndarray
             outer = watcher.armed
             watcher.armed = abort
             try:
-                return _call_here(kernel, args, abort)
+                return _checked(_call_here(kernel, args, abort), abort)
             finally:
                 watcher.armed = outer
                 if outer is None:
                     signal.set_wakeup_fd(-1)
         signal.set_wakeup_fd(previous)  # someone else's (an asyncio loop): keep it
-    return _call_in_worker(kernel, args, abort)
+    return _checked(_call_in_worker(kernel, args, abort), abort)
+
+
+def _checked(out: Any, abort: np.ndarray) -> Any:
+    """``out``, unless the flag says the call was cut short by Ctrl-C."""
+    if abort[0]:
+        # SIGINT arrived, but no KeyboardInterrupt reached this frame: Python's handler
+        # raised it inside a finaliser (``__del__``) or a callback during the call,
+        # where Python prints it and goes on (seen during cold compiles), and the
+        # kernel then stopped on the flag with its runs marked "interrupted"
+        raise KeyboardInterrupt
+    return out
 
 
 def _call_here(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) -> Any:
@@ -140,16 +155,22 @@ def _call_here(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) -> An
     Numba boxing the kernel's result (its arrays' dtypes come from a Python callback,
     ``_numba_unpickle``), the dispatcher reports the KeyboardInterrupt as the cause of a
     SystemError ("returned a result with an exception set"). It is re-raised as the
-    KeyboardInterrupt it is.
+    KeyboardInterrupt it is. Any other error of a call during which Ctrl-C arrived is
+    raised as a KeyboardInterrupt too, with the error as its cause: SIGINT landing
+    inside Numba's compiler leaves it half done, and the error that follows (seen: a
+    ``RuntimeError: no compiled object yet for <Library ...>``) is the interruption's
+    consequence, not the call's answer.
     """
     try:
         return kernel(*args, abort)
-    except SystemError as exc:
-        cause = exc.__cause__
+    except Exception as exc:
+        cause = exc.__cause__ if isinstance(exc, SystemError) else None
         while isinstance(cause, SystemError):  # one per Python frame between them
             cause = cause.__cause__
         if isinstance(cause, KeyboardInterrupt):
             raise KeyboardInterrupt from None
+        if abort[0]:
+            raise KeyboardInterrupt from exc
         raise
 
 

@@ -295,36 +295,62 @@ def main(argv: list[str] | None = None) -> int:
         compile_notice.set_enabled(False)
     try:
         return int(args.func(args) or 0)
-    except (ConfigError, ValueError, ImportError) as exc:  # ImportError: a missing extra
+    except KeyboardInterrupt:
+        # the compiled work stops within about a second (interrupt.call_interruptible)
+        return _interrupted(args)
+    except Exception as exc:
+        if _from_an_interrupt(exc):
+            # Ctrl-C inside Numba's compiler, which then failed otherwise (base/interrupt.py)
+            return _interrupted(args)
+        return _error_status(exc)
+
+
+def _error_status(exc: Exception) -> int:
+    """Report an error the user can act on in one line, exit status 2; re-raise any other."""
+    if isinstance(exc, (ConfigError, ValueError, ImportError)):  # ImportError: a missing extra
         print(f"stickslip-fast: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
-    except OSError as exc:  # a path that cannot be read or written, a full disk
+    elif isinstance(exc, OSError):  # a path that cannot be read or written, a full disk
         print(f"stickslip-fast: error: {_os_message(exc)}", file=sys.stderr)
-        return 2
-    except MemoryError as exc:
+    elif isinstance(exc, MemoryError):
         print(
             f"stickslip-fast: error: out of memory: {_one_line(exc) or 'allocation failed'}; "
             "ask for fewer values, points or samples",
             file=sys.stderr,
         )
-        return 2
-    except KeyboardInterrupt:
-        # the compiled work stops within about a second (interrupt.call_interruptible)
-        out = getattr(args, "output", None)
-        if args.command in ("sweep", "census", "basins") and out is not None and Path(out).exists():
-            msg = (
-                f"stickslip-fast: interrupted; finished chunks are in {out}, "
-                "run the same command again to resume"
-            )
-        elif args.command == "continue" and out is not None and Path(f"{out}.checkpoint").exists():
-            msg = (
-                f"stickslip-fast: interrupted; the integrations so far are in {out}.checkpoint, "
-                "run the same command again to resume"
-            )
-        else:  # nothing was written yet (or there is nothing to resume)
-            msg = "stickslip-fast: interrupted"
-        print(msg, file=sys.stderr)
-        return 130
+    else:
+        raise exc
+    return 2
+
+
+def _from_an_interrupt(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is among the causes and contexts of ``exc``."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
+
+
+def _interrupted(args: argparse.Namespace) -> int:
+    """Say what an interrupted command left behind; the exit status 130 (128 + SIGINT)."""
+    out = getattr(args, "output", None)
+    if args.command in ("sweep", "census", "basins") and out is not None and Path(out).exists():
+        msg = (
+            f"stickslip-fast: interrupted; finished chunks are in {out}, "
+            "run the same command again to resume"
+        )
+    elif args.command == "continue" and out is not None and Path(f"{out}.checkpoint").exists():
+        msg = (
+            f"stickslip-fast: interrupted; the integrations so far are in {out}.checkpoint, "
+            "run the same command again to resume"
+        )
+    else:  # nothing was written yet (or there is nothing to resume)
+        msg = "stickslip-fast: interrupted"
+    print(msg, file=sys.stderr)
+    return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

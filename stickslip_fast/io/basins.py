@@ -109,11 +109,10 @@ def write_basins(path: str | Path, result: Any, kinds: tuple[str, ...]) -> None:
     """
     KINDS = kinds  # noqa: N806
 
-    m = result.measures()
+    tests = result.tests()  # each once: the Wada tests take ~1 s each on 1000 x 1000 cells
+    m = result.measures(tests)
     fr = result.fractions(stderr=True)
-    ue = result.uncertainty_exponent()
-    w = result.wada()
-    wm = result.wada_merge()
+    ue, w, wm = tests
     atts = result.attractors
     n = result.system.n_state
     width = max([1, *(len(a.points) for a in atts)])
