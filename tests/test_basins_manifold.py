@@ -21,6 +21,7 @@ import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.analysis.basins_manifold import StableManifold, local_saddles, trace_manifold
+from stickslip_fast.io.basins_extras import read_basins_extras, store_extra
 
 MU, LAM, A, B = 3.0, (0.5, -0.4), 0.8, 0.5
 
@@ -228,11 +229,9 @@ def test_model_curve_lands_on_the_saddle_and_separates_two_basins(fold_saddle, t
     assert kinds == ["equilibrium", "orbit"]
     # the record's round trip through a file
     with h5py.File(tmp_path / "m.h5", "w") as h5:
-        g = h5.create_group("basins")
-        g["state"] = np.array(s.state_names, dtype=object)
-        m.to_group(g.create_group("manifold"))
-    with h5py.File(tmp_path / "m.h5", "r") as h5:
-        back = StableManifold.from_group(h5["basins/manifold"])
+        h5.create_group("basins")["state"] = np.array(s.state_names, dtype=object)
+    store_extra(tmp_path / "m.h5", "manifold", m)
+    back = StableManifold(**read_basins_extras(tmp_path / "m.h5")[2])
     np.testing.assert_array_equal(back.uv, m.uv)
     np.testing.assert_array_equal(back.n, m.n)
     assert back.branch_status == m.branch_status and back.settings == m.settings

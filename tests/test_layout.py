@@ -101,3 +101,23 @@ def test_no_import_circle():
     for m in sorted(edges):
         if m not in state and (cycle := visit(m)):
             raise AssertionError("import circle: " + " -> ".join(cycle))
+
+
+def test_only_io_opens_hdf5_files():
+    # io/ is the one place that knows the file schema (docs/developing.md, "The map"):
+    # other layers hand it records or dicts. Until 2026-12-02 the branch file, the basins
+    # file's boundary, edge and manifold groups and three CLI reports were read and
+    # written outside it
+    outside = []
+    for path in sorted(PKG.rglob("*.py")):
+        if path.relative_to(PKG).parts[0] == "io":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level:
+                names = [node.module or ""]
+            if any(n == "h5py" or n.startswith("h5py.") for n in names):
+                outside.append(f"{path.relative_to(PKG)}:{node.lineno}")
+    assert not outside, "h5py imported outside io/: " + ", ".join(outside)

@@ -432,15 +432,23 @@ def load_basins(path: str | Path, *, entropy_box: int | None = None) -> BasinsRe
     Cells not computed yet (an unfinished file) are labelled -1. The refined
     boundary, the saddle check and the stable manifold are read back when the file has them.
     """
-    from ..io.basins import read_basins_extras, read_basins_meta
-    from .basins_boundary import Boundary, EdgeCheck
-    from .basins_manifold import StableManifold
+    from ..io.basins import read_basins_meta
     from .census import load_census
 
     meta, stored_box = read_basins_meta(path)
     res = load_census(path)
     result = _result(res, meta, entropy_box or stored_box or DEFAULT_ENTROPY_BOX)
-    result.boundary, result.edge, result.manifold = read_basins_extras(
-        path, Boundary, EdgeCheck, StableManifold
-    )
+    result.boundary, result.edge, result.manifold = read_extras(path)
     return result
+
+
+def read_extras(path: str | Path) -> tuple[Any, Any, Any]:
+    """The refined boundary, the saddle check and the stable manifold of a basins file
+    (``Boundary``, ``EdgeCheck``, ``StableManifold``; each None where the file has none)."""
+    from ..io.basins_extras import read_basins_extras
+    from .basins_boundary import Boundary, EdgeCheck
+    from .basins_manifold import StableManifold
+
+    found = read_basins_extras(path)
+    return tuple(None if d is None else cls(**d)
+                 for cls, d in zip((Boundary, EdgeCheck, StableManifold), found))  # fmt: skip

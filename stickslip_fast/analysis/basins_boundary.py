@@ -21,7 +21,6 @@ boundary (docs/basins.md).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -68,37 +67,6 @@ class Boundary:
     n_pairs: int
     n_runs: int
     seed: int
-
-    def to_group(self, g: Any) -> None:
-        from ..io.basins import write_group
-
-        seg = ("segment",)
-        write_group(
-            g, {"segment": (np.arange(len(self.u), dtype="i4"), "refined boundary segment")},
-            {
-                "u": (self.u, seg, "refined boundary point, first axis"),
-                "v": (self.v, seg, "refined boundary point, second axis"),
-                "u_a": (self.ua[:, 0], seg, "bracket end reaching label_a, first axis"),
-                "v_a": (self.ua[:, 1], seg, "bracket end reaching label_a, second axis"),
-                "u_b": (self.ub[:, 0], seg, "bracket end reaching label_b, first axis"),
-                "v_b": (self.ub[:, 1], seg, "bracket end reaching label_b, second axis"),
-                "label_a": (self.label_a.astype("i4"), seg, "attractor id on side a"),
-                "label_b": (self.label_b.astype("i4"), seg, "attractor id on side b"),
-                "status": (self.status.astype("i1"), seg,
-                           "0: refined to tol; 1: a third outcome met (bracket stopped)"),
-            },
-            {"tol": self.tol, "n_pairs": self.n_pairs, "n_runs": self.n_runs, "seed": self.seed},
-        )  # fmt: skip
-
-    @classmethod
-    def from_group(cls, g: Any) -> Boundary:
-        r = {k: g[k][...] for k in ("u", "v", "u_a", "v_a", "u_b", "v_b", "label_a", "label_b",
-                                    "status")}  # fmt: skip
-        return cls(
-            r["u"], r["v"], np.stack([r["u_a"], r["v_a"]], 1), np.stack([r["u_b"], r["v_b"]], 1),
-            r["label_a"], r["label_b"], r["status"], float(g.attrs["tol"]),
-            int(g.attrs["n_pairs"]), int(g.attrs["n_runs"]), int(g.attrs["seed"]),
-        )  # fmt: skip
 
 
 def _segments(result: Any, max_segments: int | None, seed: int) -> tuple:
@@ -259,11 +227,9 @@ def _bisect_all(
 
 def _store_boundary(path: Any, b: Boundary) -> None:
     """Write ``/basins/boundary`` (replacing one there) and drop the refinement's checkpoint."""
-    from ..io.basins import drop_refine_progress, replace_subgroup
+    from ..io.basins_extras import store_extra
 
-    with replace_subgroup(path, "boundary") as h5:
-        b.to_group(h5["basins"].create_group("boundary"))
-        drop_refine_progress(h5)
+    store_extra(path, "boundary", b)
 
 
 # ------------------------------------------------------------------ the saddle check
@@ -339,47 +305,3 @@ class EdgeCheck:
             "median_split_crossing": float(np.median(self.split_crossing)),
             "median_t_split": med(self.t_split),
         }
-
-    def to_group(self, g: Any) -> None:
-        from ..io.basins import write_group
-
-        m = len(self.u)
-        mult = np.asarray(self.saddle_multipliers)
-        write_group(
-            g,
-            {"track": (np.arange(m, dtype="i4"), "boundary trajectory"),
-             "control": (np.arange(len(self.control_min_distance), dtype="i4"), "control"),
-             "crossing": (np.arange(self.distances.shape[1], dtype="i4"), "Poincare crossing"),
-             "saddle_point": (np.arange(len(self.saddle_points), dtype="i4"), "saddle point"),
-             "state": (g.parent["state"][...], "state variable")},
-            {"u": (self.u, ("track",), "start, first axis"),
-             "v": (self.v, ("track",), "start, second axis"),
-             "min_distance": (self.min_distance, ("track",), "closest approach to the saddle"),
-             "t_min": (self.t_min, ("track",), "time of the closest approach"),
-             "n_near": (self.n_near.astype("i4"), ("track",), "crossings within near"),
-             "split_crossing": (self.split_crossing.astype("i4"), ("track",),
-                                "first crossing where the bracket's two runs differ by > split"),
-             "t_split": (self.t_split, ("track",), "time of that crossing"),
-             "distances": (self.distances, ("track", "crossing"), "distance per crossing"),
-             "control_min_distance": (self.control_min_distance, ("control",),
-                                      "closest approach from cells away from the boundary"),
-             "control_n_near": (self.control_n_near.astype("i4"), ("control",),
-                                "crossings within near, controls"),
-             "saddle_points": (self.saddle_points, ("saddle_point", "state"),
-                               "the saddle orbit's Poincare points")},
-            {"saddle_period": self.saddle_period, "saddle_T": self.saddle_T,
-             "saddle_status": self.saddle_status, "near": self.near, "split": self.split,
-             "saddle_multipliers": json.dumps([[z.real, z.imag] for z in mult.tolist()])},
-        )  # fmt: skip
-
-    @classmethod
-    def from_group(cls, g: Any) -> EdgeCheck:
-        a = g.attrs
-        mult = np.array([complex(*z) for z in json.loads(a["saddle_multipliers"])])
-        return cls(
-            g["saddle_points"][...], int(a["saddle_period"]), float(a["saddle_T"]), mult,
-            str(a["saddle_status"]), g["u"][...], g["v"][...], g["min_distance"][...],
-            g["t_min"][...], g["n_near"][...], g["control_min_distance"][...],
-            g["control_n_near"][...], float(a["near"]), g["split_crossing"][...],
-            g["t_split"][...], float(a["split"]), g["distances"][...],
-        )  # fmt: skip

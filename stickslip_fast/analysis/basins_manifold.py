@@ -29,7 +29,6 @@ file's ``/basins/manifold`` group (:mod:`stickslip_fast.io.basins`).
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -151,43 +150,6 @@ class StableManifold:
         pts = self.uv
         d = [_polyline_distance(q, pts[self.branch == b]) for b in np.unique(self.branch)]
         return np.min(d, axis=0) if d else np.full(len(q), np.inf)
-
-    def to_group(self, g: Any) -> None:
-        from ..io.basins import write_group
-
-        pt = ("manifold_point",)
-        write_group(
-            g,
-            {"manifold_point": (np.arange(len(self.u), dtype="i4"), "point of the curve"),
-             "saddle_point": (np.arange(len(self.saddle_points), dtype="i4"), "saddle point"),
-             "state": (g.parent["state"][...], "state variable")},
-            {"u": (self.u, pt, "curve point, first axis"),
-             "v": (self.v, pt, "curve point, second axis"),
-             "branch": (self.branch.astype("i4"), pt, "traced branch of the point"),
-             "n": (self.n.astype("i4"), pt, "crossings n of the condition w.(P^n(p) - x*) = 0"),
-             "target": (self.target.astype("i4"), pt, "orbit point P^n(p) lands near"),
-             "residual": (self.residual, pt, "|w.(P^n(p) - x*)|, the unstable coordinate"),
-             "distance": (self.distance, pt, "max-norm distance of P^n(p) to x*"),
-             "mu": (self.mu, ("saddle_point",), "unstable multiplier at the orbit point"),
-             "saddle_points": (self.saddle_points, ("saddle_point", "state"),
-                               "the saddle orbit's points")},
-            {"saddle_period": self.saddle_period, "r_local": self.r_local, "tol": self.tol,
-             "ds": self.ds, "n_evals": self.n_evals,
-             "branch_status": json.dumps(list(self.branch_status)),
-             "settings": json.dumps(self.settings)},
-        )  # fmt: skip
-
-    @classmethod
-    def from_group(cls, g: Any) -> StableManifold:
-        a = g.attrs
-        r = {k: g[k][...] for k in ("u", "v", "branch", "n", "target", "residual", "distance",
-                                    "saddle_points", "mu")}  # fmt: skip
-        return cls(
-            r["u"], r["v"], r["branch"], r["n"], r["target"], r["residual"], r["distance"],
-            json.loads(a["branch_status"]), r["saddle_points"], int(a["saddle_period"]),
-            r["mu"], float(a["r_local"]), float(a["tol"]), float(a["ds"]), int(a["n_evals"]),
-            json.loads(a["settings"]),
-        )  # fmt: skip
 
 
 # ------------------------------------------------------------------ the tracer

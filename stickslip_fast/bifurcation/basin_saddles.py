@@ -172,8 +172,7 @@ def edge_check(
     )  # fmt: skip
     result.edge = e
     if store and result.path is not None:
-        from ..io.basins import replace_subgroup
+        from ..io.basins_extras import store_extra
 
-        with replace_subgroup(result.path, "edge") as h5:
-            e.to_group(h5["basins"].create_group("edge"))
+        store_extra(result.path, "edge", e)
     return e

@@ -1,5 +1,5 @@
-"""The Branch record (a continued branch with its bifurcations), its HDF5 file, and joining two
-halves."""
+"""The Branch record (a continued branch with its bifurcations) and joining two halves; its
+HDF5 file is :mod:`stickslip_fast.io.branchfile`."""
 
 from __future__ import annotations
 
@@ -10,12 +10,8 @@ from typing import Any
 
 import numpy as np
 
-#: Version of the HDF5 layout written by :meth:`Branch.to_hdf5`.
-BRANCH_SCHEMA = 2
-
-
-#: Older schemas this version still reads (see :meth:`Branch.from_hdf5`).
-READABLE_BRANCH_SCHEMAS = (1, 2)
+# the file's versions, defined with its schema in io/ (re-exported for older imports)
+from ..io.branchfile import BRANCH_SCHEMA, READABLE_BRANCH_SCHEMAS  # noqa: F401
 
 
 @dataclass
@@ -130,44 +126,19 @@ class Branch:
         and ``system`` (JSON). Readable with
         ``xarray.open_dataset(path, engine="h5netcdf", phony_dims="sort")``.
         """
-        import h5py
+        from ..io.branchfile import write_branch
 
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".partial")
-        try:
-            with h5py.File(tmp, "w") as h5:
-                a = h5.attrs
-                a["kind"] = "branch"
-                a["schema_version"] = BRANCH_SCHEMA
-                a["param"] = self.param
-                a["period"] = int(self.period)
-                a["status"] = self.status
-                a["system"] = json.dumps(self.system.to_dict())
-                h5["values"] = self.values
-                h5["points"] = self.points
-                h5["T"] = self.T
-                h5["multipliers_real"] = self.multipliers.real
-                h5["multipliers_imag"] = self.multipliers.imag
-                h5["stable"] = self.stable.astype("i1")
-                h5["bifurcation_kind"] = np.array(
-                    [b.kind for b in self.bifurcations], dtype=h5py.string_dtype()
-                )
-                h5["bifurcation_value"] = np.array([b.value for b in self.bifurcations], "f8")
-                h5["bifurcation_index"] = np.array([b.index for b in self.bifurcations], "i8")
-                h5["bifurcation_point"] = np.array(
-                    [b.point for b in self.bifurcations], "f8"
-                ).reshape(len(self.bifurcations), self.points.shape[1])
-                if self.stick_count is not None:
-                    h5["stick_count"] = np.asarray(self.stick_count, "i8")
-                    h5["stick_time"] = np.asarray(self.stick_time, "f8")
-                if self.segments is not None and any(x is not None for x in self.segments):
-                    _write_segments(h5, self.segments, self.points.shape[1])
-            tmp.replace(path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
-        return path
+        bifs = self.bifurcations
+        return write_branch(path, {
+            "param": self.param, "period": int(self.period), "status": self.status,
+            "system": json.dumps(self.system.to_dict()), "values": self.values,
+            "points": self.points, "T": self.T, "multipliers": self.multipliers,
+            "stable": self.stable, "bifurcation_kind": [b.kind for b in bifs],
+            "bifurcation_value": [b.value for b in bifs],
+            "bifurcation_index": [b.index for b in bifs],
+            "bifurcation_point": [b.point for b in bifs], "stick_count": self.stick_count,
+            "stick_time": self.stick_time, "segments": self.segments,
+        })  # fmt: skip
 
     @classmethod
     def from_hdf5(cls, path: str | Path) -> Branch:
@@ -182,45 +153,22 @@ class Branch:
         ValueError
             If the file is not a branch file of a known schema (naming what is wrong).
         """
-        import h5py
-
-        from ..io.base import check_kind
+        from ..io.branchfile import read_branch
         from ..model.system import System
 
-        with h5py.File(path, "r") as h5:
-            check_kind(path, h5, "branch", READABLE_BRANCH_SCHEMAS)
-            kinds = [k.decode() if isinstance(k, bytes) else str(k)
-                     for k in h5["bifurcation_kind"][()]]  # fmt: skip
-            values = h5["values"][()]
-            points = h5["points"][()]
-            if "bifurcation_point" in h5:
-                bif_points = h5["bifurcation_point"][()]
-            else:  # schema 1: the branch point before the event
-                bif_points = [points[min(int(i), len(points) - 1)]
-                              for i in h5["bifurcation_index"][()]]  # fmt: skip
-            bifs = [
-                Bifurcation(kinds[j], float(h5["bifurcation_value"][j]),
-                            int(h5["bifurcation_index"][j]), np.array(bif_points[j]))
-                for j in range(len(kinds))
-            ]  # fmt: skip
-            stick_count = h5["stick_count"][()] if "stick_count" in h5 else None
-            stick_time = h5["stick_time"][()] if "stick_time" in h5 else None
-            segments = _read_segments(h5) if "segment_offsets" in h5 else None
-            return cls(
-                system=System.from_dict(json.loads(h5.attrs["system"])),
-                param=str(h5.attrs["param"]),
-                period=int(h5.attrs["period"]),
-                values=values,
-                points=points,
-                T=h5["T"][()],
-                multipliers=h5["multipliers_real"][()] + 1j * h5["multipliers_imag"][()],
-                stable=h5["stable"][()].astype(bool),
-                bifurcations=bifs,
-                status=str(h5.attrs["status"]),
-                stick_count=stick_count,
-                stick_time=stick_time,
-                segments=segments,
-            )
+        d = read_branch(path)
+        bifs = [
+            Bifurcation(k, float(v), int(i), np.array(p))
+            for k, v, i, p in zip(d["bifurcation_kind"], d["bifurcation_value"],
+                                  d["bifurcation_index"], d["bifurcation_point"])
+        ]  # fmt: skip
+        return cls(
+            system=System.from_dict(json.loads(d["system"])), param=str(d["param"]),
+            period=int(d["period"]), values=d["values"], points=d["points"], T=d["T"],
+            multipliers=d["multipliers"], stable=d["stable"], bifurcations=bifs,
+            status=str(d["status"]), stick_count=d["stick_count"],
+            stick_time=d["stick_time"], segments=d["segments"],
+        )  # fmt: skip
 
     def orbit_at(self, i: int, *, tol: float = 1e-10, max_iter: int = 30,
                  rtol: float = 1e-11, atol: float = 1e-13) -> Any:  # fmt: skip
@@ -356,28 +304,6 @@ def join_branches(lower: Branch, upper: Branch) -> Branch:
             else None
         ),  # fmt: skip
     )
-
-
-def _write_segments(h5, segments: list, n_state: int) -> None:
-    """Every point's (mesh, starts) as three flat datasets: point i's segments are rows
-    ``segment_offsets[i]:segment_offsets[i + 1]`` (none: no segments) of
-    ``segment_mesh`` (each segment's start as a fraction of T; the last ends at 1) and
-    ``segment_starts``."""
-    counts = [0 if x is None else len(x[0]) - 1 for x in segments]
-    h5["segment_offsets"] = np.r_[0, np.cumsum(counts)].astype("i8")
-    h5["segment_mesh"] = np.concatenate([x[0][:-1] for x in segments if x is not None])
-    starts = [np.asarray(x[1], "f8") for x in segments if x is not None]
-    h5["segment_starts"] = np.concatenate(starts).reshape(-1, n_state)
-
-
-def _read_segments(h5) -> list:
-    """The ``segments`` list of :func:`_write_segments`' datasets."""
-    off = h5["segment_offsets"][()]
-    mesh, starts = h5["segment_mesh"][()], h5["segment_starts"][()]
-    return [
-        None if b == a else (np.r_[mesh[a:b], 1.0], starts[a:b].copy())
-        for a, b in zip(off[:-1], off[1:])
-    ]
 
 
 def segments_of(branch: Branch) -> list:

@@ -355,7 +355,6 @@ def store_manifold(result: Any, m: StableManifold) -> None:
     """Set ``result.manifold`` and write ``/basins/manifold`` into its file (replacing one there)."""
     result.manifold = m
     if result.path is not None:
-        from ..io.basins import replace_subgroup
+        from ..io.basins_extras import store_extra
 
-        with replace_subgroup(result.path, "manifold") as h5:
-            m.to_group(h5["basins"].create_group("manifold"))
+        store_extra(result.path, "manifold", m)

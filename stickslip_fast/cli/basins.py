@@ -202,7 +202,6 @@ def is_basins_file(path: Any) -> bool:
     """Whether a census file is a basins file (its configuration says kind "basins")."""
     import json
 
-    import h5py
+    from ..io import read_root_attrs
 
-    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
-        return json.loads(h5.attrs["config"]).get("kind") == "basins"
+    return json.loads(read_root_attrs(path)["config"]).get("kind") == "basins"

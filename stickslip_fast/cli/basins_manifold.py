@@ -147,11 +147,9 @@ def _fingerprint(c: dict, refine: dict | None) -> dict:
 
 def _stored(path: Any) -> Any:
     """The StableManifold stored in a basins file, or None."""
-    from ..analysis.basins_boundary import Boundary, EdgeCheck
-    from ..analysis.basins_manifold import StableManifold
-    from ..io.basins import read_basins_extras
+    from ..analysis.basins import read_extras
 
-    return read_basins_extras(path, Boundary, EdgeCheck, StableManifold)[2]
+    return read_extras(path)[2]
 
 
 def run_manifold(result: Any, c: dict, refine: dict | None = None) -> tuple[Any, bool]:

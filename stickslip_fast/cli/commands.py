@@ -168,7 +168,7 @@ def _cmd_basins(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from ..io import file_kind
+    from ..io import file_kind, read_root_attrs
 
     if file_kind(args.file) == "branch":
         from ..bifurcation.continuation import Branch
@@ -183,18 +183,14 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
         print(basins_report(args.file) if is_basins_file(args.file) else _census_report(args.file))
         if args.json:
-            import h5py
-
-            with h5py.File(args.file, "r", libver="latest", swmr=True) as h5:
-                print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+            print(json.dumps(json.loads(read_root_attrs(args.file)["config"]), indent=1))
         return 0
     print(_report(args.file, verify=True))
     if args.json:
-        from ..io import file_kind, open_h5, sweep_summary
+        from ..io import sweep_summary
 
         if file_kind(args.file) == "trajectory":
-            with open_h5(args.file) as h5:
-                print(json.dumps(json.loads(h5.attrs["config"]), indent=1))
+            print(json.dumps(json.loads(read_root_attrs(args.file)["config"]), indent=1))
         else:
             print(json.dumps(sweep_summary(args.file)["config"], indent=1))
     return 0

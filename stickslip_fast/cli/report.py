@@ -24,13 +24,11 @@ def _header(name: str, attrs: dict, cfg: dict) -> list[str]:
 
 def _census_report(path) -> str:
     """A text summary of a census file: configuration, progress, attractors per value."""
-    import h5py
-
     from ..analysis.census import load_census
     from ..core.poincare import STATUS_NAMES
+    from ..io import read_root_attrs
 
-    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
-        attrs = dict(h5.attrs)
+    attrs = read_root_attrs(path)
     cfg = json.loads(attrs["config"])
     res = load_census(path)
     done = res.raw["done"].astype(bool)
@@ -110,11 +108,10 @@ def _report(path, verify: bool = False) -> str:
     checked against their SHA-256; a damaged file raises
     :class:`~stickslip_fast.io.ResultFileError` after the summary is printed.
     """
-    from ..io import file_kind, open_h5, sweep_summary, verify_sweep, writer_alive
+    from ..io import file_kind, read_trajectory, sweep_summary, verify_sweep, writer_alive
 
     if file_kind(path) == "trajectory":
-        with open_h5(path) as h5:
-            return _trajectory_report(path, h5)
+        return _trajectory_report(path, read_trajectory(path))
     text, has_fletcher = _sweep_report(path, sweep_summary(path))
     if not verify:
         return text
@@ -166,10 +163,9 @@ def _sweep_report(path, info: dict) -> tuple[str, bool]:
     return "\n".join(lines), bool(info.get("fletcher32"))
 
 
-def _trajectory_report(path, h5) -> str:
-    """The summary of a single-run file written by ``simulate -o``."""
-    a = h5.attrs
-    cfg = json.loads(a["config"])
+def _trajectory_report(path, tr: dict) -> str:
+    """The summary of a single-run file written by ``simulate -o`` (from ``read_trajectory``)."""
+    a, cfg = tr["attrs"], tr["config"]
     st = cfg.get("settings", {})
     lines = _header(f"{path} (single run, simulate -o)", a, cfg)
     if st:
@@ -183,11 +179,11 @@ def _trajectory_report(path, h5) -> str:
         f"{int(a['n_steps'])} steps ({int(a['n_rejected'])} rejected), "
         f"{int(a['n_crossings'])} Poincare crossings"
     )
-    n_t = h5["t"].shape[0]
+    n_t = len(tr["t"])
     sample = cfg.get("sample_dt")
     lines.append(
-        f"data:      {h5['poincare'].shape[0]} Poincare points, {n_t} samples"
+        f"data:      {len(tr['poincare'])} Poincare points, {n_t} samples"
         + (f" every {sample:g}" if n_t and sample else "")
-        + f"; state {', '.join(s.decode() if isinstance(s, bytes) else str(s) for s in h5['state'][...])}"
+        + f"; state {', '.join(tr['state_names'])}"
     )
     return "\n".join(lines)

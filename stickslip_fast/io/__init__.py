@@ -72,7 +72,9 @@ from .base import (  # noqa: F401 (the private helpers stay in io.base)
     open_h5,
     writer_alive,
 )
-from .basins import read_basins_extras, read_basins_meta, write_basins  # noqa: F401
+from .basins import read_basins_meta, write_basins  # noqa: F401
+from .basins_extras import read_basins_extras, store_extra  # noqa: F401
+from .branchfile import read_branch, write_branch  # noqa: F401
 from .census import (  # noqa: F401
     CENSUS_RUN_FIELDS,
     CensusFile,
@@ -92,6 +94,7 @@ from .layout import (  # noqa: F401
 from .readers import (  # noqa: F401
     file_kind,
     read_dataset,
+    read_root_attrs,
     read_sweep,
     sweep_summary,
     verify_sweep,

@@ -7,6 +7,8 @@ import functools
 import hashlib
 import json
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -142,6 +144,25 @@ def open_h5(path: str | Path, *, check_truncation: bool = True) -> h5py.File:
         hint = "; a sweep is writing it now, try again" if live else ""
         raise ResultFileError(f"{path}: not a readable HDF5 file ({_short(exc)}){hint}") from None
     return h5py.File(fid)
+
+
+@contextmanager
+def atomic_h5(path: str | Path, **kw: Any) -> Iterator[h5py.File]:
+    """A new HDF5 file for writing that appears at ``path`` only once complete.
+
+    It is written as ``<path>.partial`` and renamed when the block ends; on any error
+    (or Ctrl-C) the partial file is removed and ``path`` is left as it was. ``kw`` go
+    to ``h5py.File`` (e.g. ``libver``).
+    """
+    path = Path(path)
+    tmp = path.with_name(path.name + ".partial")
+    try:
+        with h5py.File(tmp, "w", **kw) as h5:
+            yield h5
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def check_kind(path: str | Path, h5: h5py.File, kind: str, readable: tuple[int, ...]) -> int:

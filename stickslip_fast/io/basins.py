@@ -65,7 +65,6 @@ import numpy as np
 __all__ = [
     "write_basins",
     "read_basins_meta",
-    "read_basins_extras",
     "write_group",
     "read_refine_progress",
     "write_refine_progress",
@@ -180,27 +179,6 @@ def read_basins_meta(path: str | Path) -> tuple[dict, int | None]:
             raise ValueError(f"{path}: not a stickslip_fast basins file (a census file?)")
         box = int(h5["basins"].attrs["entropy_box"]) if "basins" in h5 else None
     return cfg["basins"], box
-
-
-def read_basins_extras(
-    path: str | Path, boundary_cls: Any, edge_cls: Any, manifold_cls: Any = None
-) -> tuple[Any, ...]:
-    """The refined boundary, the saddle check (and the stable manifold) of a basins file.
-
-    Each None where the file has none. Built by the records' ``from_group``
-    (``Boundary``, ``EdgeCheck`` and ``StableManifold`` of the analysis layer,
-    passed in); with ``manifold_cls`` None, only the first two are returned.
-    """
-    Boundary, EdgeCheck = boundary_cls, edge_cls  # noqa: N806
-
-    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
-        g = h5.get("basins")
-        b = Boundary.from_group(g["boundary"]) if g is not None and "boundary" in g else None
-        e = EdgeCheck.from_group(g["edge"]) if g is not None and "edge" in g else None
-        if manifold_cls is None:
-            return b, e
-        m = manifold_cls.from_group(g["manifold"]) if g is not None and "manifold" in g else None
-    return b, e, m
 
 
 def replace_subgroup(path: str | Path, name: str) -> h5py.File:

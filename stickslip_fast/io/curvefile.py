@@ -11,7 +11,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .base import check_kind
+from .base import atomic_h5, check_kind
 
 #: Version of the layout written by :func:`write_curve`.
 CURVE_SCHEMA = 1
@@ -35,30 +35,24 @@ def write_curve(path: str | Path, data: dict[str, Any]) -> Path:
     attributes of CURVE_ATTRS; those of CURVE_OPTIONAL where not None) atomically (a ``.partial`` file renamed at the end)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".partial")
-    try:
-        with h5py.File(tmp, "w") as h5:
-            h5.attrs["kind"] = "curve"
-            h5.attrs["schema_version"] = CURVE_SCHEMA
-            for name in CURVE_ATTRS:
-                h5.attrs[name] = data[name]
-            for name in CURVE_DATASETS:
+    with atomic_h5(path) as h5:
+        h5.attrs["kind"] = "curve"
+        h5.attrs["schema_version"] = CURVE_SCHEMA
+        for name in CURVE_ATTRS:
+            h5.attrs[name] = data[name]
+        for name in CURVE_DATASETS:
+            h5[name] = np.asarray(data[name], dtype="f8")
+        h5["codim2_kind"] = np.array(list(data["codim2_kind"]), dtype=h5py.string_dtype())
+        h5["codim2_values"] = np.asarray(data["codim2_values"], "f8").reshape(-1, 2)
+        h5["codim2_index"] = np.asarray(data["codim2_index"], "i8")
+        n = np.asarray(data["points"]).shape[1]
+        h5["codim2_point"] = np.asarray(data["codim2_point"], "f8").reshape(-1, n)
+        for name in CURVE_OPTIONAL:
+            if data.get(name) is not None:
                 h5[name] = np.asarray(data[name], dtype="f8")
-            h5["codim2_kind"] = np.array(list(data["codim2_kind"]), dtype=h5py.string_dtype())
-            h5["codim2_values"] = np.asarray(data["codim2_values"], "f8").reshape(-1, 2)
-            h5["codim2_index"] = np.asarray(data["codim2_index"], "i8")
-            n = np.asarray(data["points"]).shape[1]
-            h5["codim2_point"] = np.asarray(data["codim2_point"], "f8").reshape(-1, n)
-            for name in CURVE_OPTIONAL:
-                if data.get(name) is not None:
-                    h5[name] = np.asarray(data[name], dtype="f8")
-            for name in CURVE_OPTIONAL_ATTRS:
-                if data.get(name) is not None:
-                    h5.attrs[name] = data[name]
-        tmp.replace(path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        for name in CURVE_OPTIONAL_ATTRS:
+            if data.get(name) is not None:
+                h5.attrs[name] = data[name]
     return path
 
 

@@ -73,6 +73,16 @@ def sweep_summary(path: str | Path) -> dict[str, Any]:
             ) from None
 
 
+def read_root_attrs(path: str | Path) -> dict[str, Any]:
+    """Every root attribute of a result file of any kind (``config`` is its JSON text).
+
+    Opened as :func:`~stickslip_fast.io.base.open_h5` does: readable while a writer
+    appends, and a damaged file fails at once naming itself.
+    """
+    with open_h5(path) as h5:
+        return dict(h5.attrs)
+
+
 def file_kind(path: str | Path) -> str:
     """``"trajectory"`` (``simulate -o``), ``"census"``, ``"branch"`` (``continue``), else ``"sweep"``."""
     with open_h5(path) as h5:

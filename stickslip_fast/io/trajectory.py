@@ -9,7 +9,15 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .base import ResultFileError, _make_parent, _os_error, _short, config_digest, open_h5
+from .base import (
+    ResultFileError,
+    _make_parent,
+    _os_error,
+    _short,
+    atomic_h5,
+    config_digest,
+    open_h5,
+)
 from .layout import SCHEMA_VERSION, write_root_attrs
 
 
@@ -57,14 +65,11 @@ def write_trajectory(path: str | Path, result: Any, config: Any = None) -> Path:
     cfg, title, notes = _trajectory_config(result, config)
     text, digest = config_digest(_jsonable(cfg))
     _make_parent(path)
-    tmp = path.with_name(path.name + ".partial")
     try:
-        with h5py.File(tmp, "w", libver="latest") as h5:
+        with atomic_h5(path, libver="latest") as h5:
             _write_trajectory_file(h5, result, text, digest, title, notes)
-        tmp.replace(path)
-    except BaseException as exc:
-        tmp.unlink(missing_ok=True)
-        if isinstance(exc, OSError) and not exc.filename:
+    except OSError as exc:
+        if not exc.filename:
             raise _os_error(path, exc) from None
         raise
     return path
