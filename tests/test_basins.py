@@ -116,6 +116,11 @@ def test_wada_test_tells_newton_basins_from_sectors():
     newton = np.argmin(np.abs(z[..., None] - roots), axis=-1)
     w = bm.wada_grid_test(newton, r_max=4)
     assert w.n_basins == 3 and w.is_wada and w.fraction[2] > 0.99  # measured 0.996
+    # the verdict takes r <= 3 (the thin stripes below); Newton's basins pass there at
+    # every resolution (Daza et al. 2018's check)
+    for n in (150, 600):
+        w = bm.wada_grid_test(_newton_z3(n))
+        assert w.is_wada and 0.99 < w.fraction[2] and w.fraction[1] < 0.99  # 0.996 / 0.998
     x, y = np.meshgrid(np.linspace(-1, 1, 300), np.linspace(-1, 1, 300), indexing="ij")
     sectors = ((np.arctan2(y, x) + np.pi) / (2 * np.pi) * 3).astype(int) % 3
     w = bm.wada_grid_test(sectors, r_max=4)
@@ -155,13 +160,19 @@ def test_merging_test_tells_newton_basins_from_sectors_and_stripes():
     )
     # repeating stripes 0, 1, 2, 0, ... of 3-5 cells: never Wada (each boundary is two
     # basins' only). Fattened by 5 cells the merged boundaries cover each other, so the
-    # verdict takes r <= 2, the two-cell thickness of a boundary on the grid; the grid
-    # test's verdict, up to its r_max = 5, calls the 3- and 4-cell stripes Wada
+    # verdict takes r <= 2, the two-cell thickness of a boundary on the grid. The grid
+    # test's verdict took r <= 5 until 2026-12-02 and called the 3- and 4-cell stripes
+    # Wada (96.6-100 % of boundary cells see every basin at r = 5); it takes r <= 3 now
     for width in (3, 4, 5):
         thin = np.tile(np.repeat(np.arange(3), width), 10)[:, None] * np.ones(60, dtype=int)
         w = bm.wada_merge_test(thin)
         assert not w.is_wada and w.uncovered[4] == 0.0 and w.uncovered[1] > 0.02
-        assert bm.wada_grid_test(thin).is_wada is (width < 5)  # measured 0.966-1 at r = 5
+        g = bm.wada_grid_test(thin)
+        assert not g.is_wada and g.fraction[width - 1] > 0.95  # all within r = width
+        assert bm.wada_grid_test(thin, r_wada=5).is_wada is (width < 5)  # the old verdict
+    # stripes of 2 cells cannot be told from a Wada map on the grid: both tests say Wada
+    two = np.tile(np.repeat(np.arange(3), 2), 10)[:, None] * np.ones(60, dtype=int)
+    assert bm.wada_grid_test(two).is_wada and bm.wada_merge_test(two).is_wada
     # two basins: both merged maps are the same map, their boundaries the same cells
     w = bm.wada_merge_test(stripes.clip(0, 1), r_max=2)
     assert w.n_basins == 2 and not w.is_wada and np.all(w.uncovered == 0.0)
@@ -294,6 +305,7 @@ def test_writing_a_map_runs_each_test_once_and_stores_what_measures_gives(
         np.testing.assert_array_equal(g["wada_fraction"][...], tests.wada.fraction)
         np.testing.assert_array_equal(g["wada_merge_uncovered"][...], tests.wada_merge.uncovered)
         np.testing.assert_array_equal(g["uncertain_fraction"][...], tests.uncertainty.f)
+        assert (g.attrs["wada_verdict_radius"], g.attrs["wada_merge_verdict_radius"]) == (3, 2)
 
 
 def test_refined_boundary_brackets_straddle_the_boundary(ref):

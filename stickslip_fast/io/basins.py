@@ -11,7 +11,10 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
                                measures: basin_entropy, boundary_basin_entropy,
                                boundary_box_fraction, uncertainty_exponent(_stderr),
                                boundary_dimension, n_basins, wada, wada_merge,
-                               failed_fraction
+                               failed_fraction; wada_verdict_radius and
+                               wada_merge_verdict_radius (the largest r each
+                               Wada verdict took: 3 and 2; absent before
+                               2026-12-02, when the grid verdict took r <= 5)
       u (n1), v (n2)           coordinates along the two axes (attrs long_name)
       state (S)                state names
       label (u, v)       i4    attractor id per cell (-1: failed)
@@ -128,6 +131,10 @@ def write_basins(path: str | Path, result: Any, kinds: tuple[str, ...]) -> None:
         g.attrs["eta"] = float(result.system.eta)
         for k, v in m.items():
             g.attrs[k] = v
+        # the largest r each verdict took (absent from files before 2026-12-02, whose
+        # grid verdict took any r of wada_fraction, and whose merging verdict r <= 2)
+        g.attrs["wada_verdict_radius"] = int(w.r_wada)
+        g.attrs["wada_merge_verdict_radius"] = int(wm.r_wada)
         names = np.array(result.system.state_names, dtype=object)
         _scale(g, "u", result.g1, f"{result.axis_names[0]}(0): first axis of the plane")
         _scale(g, "v", result.g2, f"{result.axis_names[1]}(0): second axis of the plane")
