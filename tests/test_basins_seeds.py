@@ -10,6 +10,9 @@ its file. Cost on the shared 2-core VM: 1-8 s for each map test; 7 s and 4 s for
 tests once the orbit and census kernels are compiled (the fixture of test_basins_manifold).
 """
 
+import shutil
+
+import h5py
 import numpy as np
 import pytest
 from test_basins_manifold import SADDLE, A, B, E, fold_saddle, plane_crossings_of
@@ -131,3 +134,48 @@ def test_model_scan_on_a_maps_own_grid_is_stored_in_its_file(fold_saddle, tmp_pa
     back = ssf.load_basins(tmp_path / "b.h5").manifold
     assert back.settings == m.settings and back.settings["seeds"] == "scan"
     np.testing.assert_array_equal(back.uv, m.uv)
+
+
+def test_a_second_trace_uses_the_scan_stored_in_the_file(fold_saddle, tmp_path, monkeypatch):
+    # the scan (82 s on the fold map of docs/basins.md) is kept in /basins/manifold_scan
+    # and used again, bit for bit, by a later trace with the same saddle, plane, scan
+    # arguments and tolerances; other scan arguments scan again (and replace it)
+    from stickslip_fast.bifurcation import stable_manifold as sm
+    from stickslip_fast.io.basins_extras import read_manifold_scan
+
+    s = fold_saddle.system
+    g1 = np.linspace(SEED[0] - 1e-3, SEED[0] + 1e-3, 3)
+    g2 = np.linspace(SEED[1] - 1e-3, SEED[1] + 1e-3, 3)
+    res = ssf.basins(s, (g1, g2), out=tmp_path / "b.h5", progress=False, entropy_box=3)
+    shutil.copy(tmp_path / "b.h5", tmp_path / "c.h5")  # a map with no scan stored
+    scans = []
+    real = sm.manifold_seeds
+    monkeypatch.setattr(sm, "manifold_seeds", lambda *a, **k: scans.append(k) or real(*a, **k))
+    kw = dict(seeds="scan", ds=4e-4, r_local=1e-6, n_max=12)
+    first = ssf.stable_manifold(res, fold_saddle, max_points=2, **kw)
+    assert len(scans) == 1
+    with h5py.File(tmp_path / "b.h5", "r") as h5:
+        key = h5["basins/manifold_scan"].attrs["key"]
+    stored = read_manifold_scan(tmp_path / "b.h5", key)
+    fresh = real(res, fold_saddle, r_local=1e-6, n_max=12)
+    assert stored.keys() == fresh.keys()
+    for name in fresh:
+        np.testing.assert_array_equal(stored[name], fresh[name], err_msg=name)
+    # the same scan, a longer trace: no scan, and the same curve as a fresh run
+    again = ssf.stable_manifold(ssf.load_basins(tmp_path / "b.h5"), fold_saddle, max_points=3,
+                                **kw)  # fmt: skip
+    assert len(scans) == 1 and again.settings["scan"] == first.settings["scan"]
+    other = ssf.load_basins(tmp_path / "c.h5")
+    alone = ssf.stable_manifold(other, fold_saddle, max_points=3, store=False, **kw)
+    assert len(scans) == 2  # no scan in that file, and store=False writes none
+    np.testing.assert_array_equal(again.uv, alone.uv)
+    assert again.settings == alone.settings
+    with h5py.File(tmp_path / "c.h5", "r") as h5:
+        assert "manifold_scan" not in h5["basins"] and "manifold" not in h5["basins"]
+    # another r_scan is another scan, and it replaces the stored one
+    ssf.stable_manifold(res, fold_saddle, max_points=2, scan={"r_scan": 2e-2}, **kw)
+    assert len(scans) == 3 and read_manifold_scan(tmp_path / "b.h5", key) is None
+    # a rewrite of the map's /basins group keeps the scan
+    ssf.basins(s, (g1, g2), out=tmp_path / "b.h5", progress=False, entropy_box=3)
+    with h5py.File(tmp_path / "b.h5", "r") as h5:
+        assert "manifold_scan" in h5["basins"]

@@ -9,6 +9,7 @@ plane start as it is, then crossing to crossing on the section). See docs/basins
 from __future__ import annotations
 
 import functools
+import json
 import math
 import os
 from typing import Any
@@ -225,7 +226,52 @@ def manifold_seeds(
     return out
 
 
-def _resolve_seeds(seeds, scan, result, trace: dict, target, orbit, **plane_kw) -> tuple:
+def _exact(obj: Any) -> Any:
+    """``obj`` for a JSON key that tells every float bit apart (floats as hex)."""
+    if isinstance(obj, dict):
+        return {str(k): _exact(v) for k, v in sorted(obj.items())}
+    if isinstance(obj, (list, tuple, np.ndarray)):
+        return [_exact(v) for v in np.asarray(obj, dtype=object).tolist()] if len(obj) else []
+    if isinstance(obj, (bool, np.bool_, str)) or obj is None:
+        return obj if not isinstance(obj, np.bool_) else bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    return float(obj).hex()
+
+
+def _scan_key(target: Any, orbit: Any, scan_kw: dict, plane_kw: dict) -> str:
+    """What a seed scan depends on, as text: the plane (system, base, directions, box, or
+    the map's grid), the saddle orbit, the scan's arguments and the tolerances."""
+    system, b, dirs, box, result = _plane_of(target, plane_kw["plane"], plane_kw["base"],
+                                             plane_kw["bounds"])  # fmt: skip
+    key = {
+        "system": system.to_dict(), "base": b, "directions": dirs, "box": box,
+        "grid": None if result is None else [result.g1, result.g2],
+        "orbit": {"system": orbit.system.to_dict(), "points": np.asarray(orbit.points),
+                  "period": int(orbit.period)},
+        "scan": scan_kw, "rtol": plane_kw["rtol"], "atol": plane_kw["atol"],
+    }  # fmt: skip
+    return json.dumps(_exact(key), sort_keys=True)
+
+
+def _scan_once(target: Any, orbit: Any, result: Any, store: bool, kw: dict, plane_kw: dict):
+    """:func:`manifold_seeds`, or the scan the map's file holds for the same inputs; a new
+    scan is stored there (with ``store``): a second trace need not scan again."""
+    path = getattr(result, "path", None)
+    if path is None:
+        return manifold_seeds(target, orbit, **plane_kw, **kw)
+    from ..io.basins_extras import read_manifold_scan, store_manifold_scan
+
+    key = _scan_key(target, orbit, kw, plane_kw)
+    scanned = read_manifold_scan(path, key)
+    if scanned is None:
+        scanned = manifold_seeds(target, orbit, **plane_kw, **kw)
+        if store:
+            store_manifold_scan(path, key, scanned)
+    return scanned
+
+
+def _resolve_seeds(seeds, scan, result, trace: dict, target, orbit, store, **plane_kw) -> tuple:
     """(seeds, trace settings, scan record or None) of :func:`stable_manifold`."""
     scanned = None
     if isinstance(seeds, str):
@@ -233,7 +279,7 @@ def _resolve_seeds(seeds, scan, result, trace: dict, target, orbit, **plane_kw) 
             raise ValueError(f"seeds must be points (k, 2), None or 'scan', got {seeds!r}")
         kw = {k: trace[k] for k in ("r_local", "n_max", "tol") if k in trace}
         kw.update(scan or {})
-        scanned = manifold_seeds(target, orbit, **plane_kw, **kw)
+        scanned = _scan_once(target, orbit, result, store, kw, plane_kw)
         seeds = scanned["uv"]
         spacing = min(np.min(np.diff(scanned["g1"])), np.min(np.diff(scanned["g2"])))
         trace = {"skip_radius": 0.25 * float(spacing), **trace}  # one curve, many edges
@@ -278,7 +324,10 @@ seeds : array_like (k, 2) or "scan", optional
     (:func:`refine_boundary`, status 0). ``"scan"``: from the saddle alone,
     :func:`manifold_seeds` over the map's grid (or ``scan["grid"]``) with the
     tracer's ``r_local``, ``n_max``, ``tol``; recorded in ``settings["scan"]``;
-    ``skip_radius`` then defaults to a quarter of the grid's spacing.
+    ``skip_radius`` then defaults to a quarter of the grid's spacing. With a map
+    that has a file, the scan is kept there (``/basins/manifold_scan``; with
+    ``store``) and used again by a later call with the same saddle, plane, scan
+    arguments and tolerances, bit for bit.
 plane, base, bounds
     With a System: the plane as for :func:`basins`, and its box
     [[u_min, u_max], [v_min, v_max]].
@@ -326,8 +375,8 @@ def stable_manifold(
                  saddle=(orbit.system, np.asarray(orbit.points), orbit.period))  # fmt: skip
     with journal(checkpoint, "stable_manifold", given):
         seeds, trace, scanned = _resolve_seeds(
-            seeds, scan, result, trace, target, orbit, plane=plane, base=base, bounds=bounds,
-            rtol=rtol, atol=atol,
+            seeds, scan, result, trace, target, orbit, store, plane=plane, base=base,
+            bounds=bounds, rtol=rtol, atol=atol,
         )  # fmt: skip
         pts, saddles = _saddles(system, orbit, rtol, atol)
         r = trace_manifold(_plane_map(system, b, dirs, rtol, atol), saddles, seeds, box,

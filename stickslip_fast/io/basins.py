@@ -45,6 +45,13 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
                                attrs saddle_period, r_local, tol, ds, n_evals,
                                branch_status (JSON list: why each branch ended),
                                settings (JSON)
+      manifold_scan/           (optional) the seed scan of stable_manifold(seeds="scan"):
+                               seed, edge, end, axis, g1, g2 scales; uv (seed, axis),
+                               n, target, residual, distance (seed); edges (edge, end,
+                               axis), edge_n, edge_target, edge_status (edge); closest
+                               (g1, g2); attrs r_scan, n_max, n_evals, key (JSON of
+                               the scan's inputs, floats as hex: it is used again
+                               only for the same key)
       boundary_progress/       (only while a refinement is unfinished) the brackets
                                after the last completed bisection step: u_a, v_a,
                                u_b, v_b, status; attrs config (JSON: tol,
@@ -73,7 +80,7 @@ __all__ = [
     "write_refine_progress",
 ]
 
-_KEEP = ("boundary", "edge", "manifold", "boundary_progress")
+_KEEP = ("boundary", "edge", "manifold", "manifold_scan", "boundary_progress")
 _PROGRESS = "boundary_progress"
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from .basins import drop_refine_progress, replace_subgroup, write_group
 
-__all__ = ["store_extra", "read_basins_extras"]
+__all__ = ["store_extra", "read_basins_extras", "store_manifold_scan", "read_manifold_scan"]
 
 
 def _boundary_columns(g: h5py.Group, b: Any) -> None:
@@ -162,3 +162,58 @@ def read_basins_extras(path: str | Path) -> tuple[dict | None, dict | None, dict
             for name in ("boundary", "edge", "manifold")
         ]
     return found[0], found[1], found[2]
+
+
+#: The seed scan of a stable manifold (``stable_manifold(..., seeds="scan")``), kept so that
+#: a second trace of the same saddle in the same plane need not scan again.
+SCAN_GROUP = "manifold_scan"
+
+
+def store_manifold_scan(path: str | Path, key: str, scan: dict[str, Any]) -> None:
+    """Write a seed scan (:func:`~stickslip_fast.bifurcation.stable_manifold.manifold_seeds`'s
+    dict) as ``/basins/manifold_scan``, replacing one there; ``key`` (text) names the
+    scan's inputs, and :func:`read_manifold_scan` gives the scan back only for that key."""
+    with replace_subgroup(path, SCAN_GROUP) as h5:
+        g = h5["basins"].create_group(SCAN_GROUP)
+        seed, edge = ("seed",), ("edge",)
+        status = np.array(list(scan["edge_status"]), dtype=h5py.string_dtype())
+        write_group(
+            g,
+            {"seed": (np.arange(len(scan["uv"]), dtype="i4"), "seed on the manifold"),
+             "edge": (np.arange(len(scan["edge_n"]), dtype="i4"), "sign-change edge"),
+             "end": (np.arange(2, dtype="i4"), "end of an edge"),
+             "axis": (np.arange(2, dtype="i4"), "axis of the plane"),
+             "g1": (scan["g1"], "the scan's grid, first axis"),
+             "g2": (scan["g2"], "the scan's grid, second axis")},
+            {"uv": (scan["uv"], ("seed", "axis"), "the seed (plane coordinates)"),
+             "n": (np.asarray(scan["n"], "i4"), seed, "crossings n of the seed's condition"),
+             "target": (np.asarray(scan["target"], "i4"), seed, "orbit point it lands near"),
+             "residual": (scan["residual"], seed, "|g_n| at the seed"),
+             "distance": (scan["distance"], seed, "max-norm distance of P^n to the orbit point"),
+             "edges": (scan["edges"], ("edge", "end", "axis"), "the edge's two grid nodes"),
+             "edge_n": (np.asarray(scan["edge_n"], "i4"), edge, "n of the sign change"),
+             "edge_target": (np.asarray(scan["edge_target"], "i4"), edge,
+                             "orbit point of the sign change"),
+             "edge_status": (status, edge, "seed, or why none came of the edge"),
+             "closest": (scan["closest"], ("g1", "g2"),
+                         "a node's smallest distance of its images to the orbit")},
+            {"r_scan": float(scan["r_scan"]), "n_max": int(scan["n_max"]),
+             "n_evals": int(scan["n_evals"]), "key": key},
+        )  # fmt: skip
+
+
+def read_manifold_scan(path: str | Path, key: str) -> dict[str, Any] | None:
+    """The seed scan stored in a basins file under ``key``, or None (none, or another key)."""
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        g = h5.get(f"basins/{SCAN_GROUP}")
+        if g is None or g.attrs.get("key") != key:
+            return None
+        out: dict[str, Any] = {k: g[k][...] for k in ("uv", "residual", "distance", "edges",
+                                                      "closest", "g1", "g2")}  # fmt: skip
+        for k in ("n", "target", "edge_n", "edge_target"):
+            out[k] = g[k][...].astype(int)
+        out["edge_status"] = [x.decode() if isinstance(x, bytes) else str(x)
+                              for x in g["edge_status"][...]]  # fmt: skip
+        out.update(r_scan=float(g.attrs["r_scan"]), n_max=int(g.attrs["n_max"]),
+                   n_evals=int(g.attrs["n_evals"]))  # fmt: skip
+    return out
