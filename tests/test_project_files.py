@@ -93,3 +93,39 @@ def test_the_period_map_config_loads():
     cfg = load_config(os.path.join(ROOT, "data", "maps", "period_map_eta_k12.toml"))
     assert tuple(cfg.sweep["param"]) == ("eta", "k12")
     assert os.path.exists(os.path.join(ROOT, "docs", "figures", "period_map.png"))
+
+
+_WITHOUT_EXTRAS = """
+import importlib, importlib.abc, pkgutil, sys
+# what only the extras install (pyproject.toml): test, dask, cuda
+BLOCK = ("scipy", "xarray", "h5netcdf", "dask", "distributed", "hypothesis", "numba_cuda",
+         "pytest")
+class Block(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in BLOCK:
+            raise ModuleNotFoundError(f"No module named {name!r} (an extra)")
+sys.meta_path.insert(0, Block())
+import stickslip_fast
+for m in pkgutil.walk_packages(stickslip_fast.__path__, "stickslip_fast."):
+    if not m.name.endswith("__main__"):
+        try:
+            importlib.import_module(m.name)
+        except ImportError as e:
+            print(m.name, "|", e)
+"""
+
+
+def test_the_package_imports_with_its_runtime_dependencies_alone():
+    # a plain `pip install stickslip_fast` has no SciPy (a test extra). Until 2026-12-02 the
+    # stick-phase curves imported scipy.optimize at module level, and `import
+    # stickslip_fast` failed there; every module but the CUDA backend's (which names its
+    # extra) must import without the extras
+    out = subprocess.run([sys.executable, "-c", _WITHOUT_EXTRAS], capture_output=True,
+                         text=True, timeout=300)  # fmt: skip
+    assert out.returncode == 0, out.stderr[-2000:]
+    failed = [line.split(" | ") for line in out.stdout.strip().splitlines()]
+    assert {m for m, _ in failed} <= {
+        "stickslip_fast.backends.cuda", "stickslip_fast.backends.cuda_device",
+        "stickslip_fast.backends.cuda_kernels",
+    }, failed  # fmt: skip
+    assert all('pip install "stickslip_fast[cuda]"' in msg for _, msg in failed), failed

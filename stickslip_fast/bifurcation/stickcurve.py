@@ -29,9 +29,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..analysis.simulate import simulate
+from ..base.roots import brent_root
 from ..model.system import System
 from .detection import _sorted_eigs
 from .foldcurve import run_curve
@@ -113,7 +113,7 @@ def slip_extremum(system: System, z: np.ndarray, t_guess: float, width: float, d
     qa, qb = q(a), sign * _slip(system, ys[k + 1], disk)[1]
     if not (qa < 0 < qb):
         raise ValueError(f"the slip-speed {extremum} of disk {disk} is not bracketed")
-    ts = brentq(q, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
+    ts = brent_root(q, a, b, xtol=1e-13, rtol=4 * np.finfo(float).eps)
     return float(ts), _slip(system, _state(system, ya, ts - a, rtol, atol), disk)[0]
 
 
