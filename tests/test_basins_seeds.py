@@ -179,3 +179,10 @@ def test_a_second_trace_uses_the_scan_stored_in_the_file(fold_saddle, tmp_path, 
     ssf.basins(s, (g1, g2), out=tmp_path / "b.h5", progress=False, entropy_box=3)
     with h5py.File(tmp_path / "b.h5", "r") as h5:
         assert "manifold_scan" in h5["basins"]
+    # another version of the package may scan otherwise: it scans again
+    again = dict(kw, scan={"r_scan": 2e-2})
+    ssf.stable_manifold(res, fold_saddle, max_points=2, **again)
+    assert len(scans) == 3
+    monkeypatch.setattr(sm, "package_version", lambda: "99.0")
+    ssf.stable_manifold(res, fold_saddle, max_points=2, **again)
+    assert len(scans) == 4

@@ -20,6 +20,7 @@ from ..analysis.basins_manifold import StableManifold, local_saddles, trace_mani
 from ..base.interrupt import new_abort_flag
 from ..base.journal import call_journaled, journal
 from ..base.threads import run_concurrently
+from ..base.version import package_version
 from ..core.poincare import STATUS_NAMES
 from ..core.trajectory import kernel_variant
 from ..core.variational import propagate_tangents
@@ -241,7 +242,8 @@ def _exact(obj: Any) -> Any:
 
 def _scan_key(target: Any, orbit: Any, scan_kw: dict, plane_kw: dict) -> str:
     """What a seed scan depends on, as text: the plane (system, base, directions, box, or
-    the map's grid), the saddle orbit, the scan's arguments and the tolerances."""
+    the map's grid), the saddle orbit, the scan's arguments and the tolerances, and the
+    package's version (another version may scan otherwise)."""
     system, b, dirs, box, result = _plane_of(target, plane_kw["plane"], plane_kw["base"],
                                              plane_kw["bounds"])  # fmt: skip
     key = {
@@ -250,6 +252,7 @@ def _scan_key(target: Any, orbit: Any, scan_kw: dict, plane_kw: dict) -> str:
         "orbit": {"system": orbit.system.to_dict(), "points": np.asarray(orbit.points),
                   "period": int(orbit.period)},
         "scan": scan_kw, "rtol": plane_kw["rtol"], "atol": plane_kw["atol"],
+        "package_version": package_version(),
     }  # fmt: skip
     return json.dumps(_exact(key), sort_keys=True)
 
