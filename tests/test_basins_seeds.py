@@ -141,6 +141,7 @@ def test_a_second_trace_uses_the_scan_stored_in_the_file(fold_saddle, tmp_path, 
     # and used again, bit for bit, by a later trace with the same saddle, plane, scan
     # arguments and tolerances; other scan arguments scan again (and replace it)
     from stickslip_fast.bifurcation import stable_manifold as sm
+    from stickslip_fast.cli.basins import basins_report
     from stickslip_fast.io.basins_extras import read_manifold_scan
 
     s = fold_saddle.system
@@ -158,6 +159,12 @@ def test_a_second_trace_uses_the_scan_stored_in_the_file(fold_saddle, tmp_path, 
         key = h5["basins/manifold_scan"].attrs["key"]
     stored = read_manifold_scan(tmp_path / "b.h5", key)
     fresh = real(res, fold_saddle, r_local=1e-6, n_max=12)
+    # `stickslip-fast info` says it is there
+    line = [x for x in basins_report(tmp_path / "b.h5").splitlines() if x.startswith("seed scan:")]
+    sc = first.settings["scan"]
+    assert line == [f"seed scan: 3 x 3 nodes, {sc['seeds']} seeds from {sc['edges']} sign-change "
+                    f"edges, {sc['n_evals']} evaluations; stored, so a trace of the same saddle "
+                    "with the same scan settings reads it"]  # fmt: skip
     assert stored.keys() == fresh.keys()
     for name in fresh:
         np.testing.assert_array_equal(stored[name], fresh[name], err_msg=name)

@@ -175,6 +175,15 @@ def basins_report(path: Any) -> str:
         from .basins_manifold import manifold_line
 
         lines.append(manifold_line(r.manifold))
+    from ..io.basins_extras import manifold_scan_summary
+
+    sc = manifold_scan_summary(path)
+    if sc is not None:
+        lines.append(
+            f"seed scan: {sc['grid'][0]} x {sc['grid'][1]} nodes, {sc['seeds']} seeds from "
+            f"{sc['edges']} sign-change edges, {sc['n_evals']} evaluations; stored, so a trace "
+            "of the same saddle with the same scan settings reads it"
+        )
     return "\n".join(lines)
 
 

@@ -17,7 +17,10 @@ import numpy as np
 
 from .basins import drop_refine_progress, replace_subgroup, write_group
 
-__all__ = ["store_extra", "read_basins_extras", "store_manifold_scan", "read_manifold_scan"]
+__all__ = [
+    "store_extra", "read_basins_extras", "store_manifold_scan", "read_manifold_scan",
+    "manifold_scan_summary",
+]  # fmt: skip
 
 
 def _boundary_columns(g: h5py.Group, b: Any) -> None:
@@ -217,3 +220,14 @@ def read_manifold_scan(path: str | Path, key: str) -> dict[str, Any] | None:
         out.update(r_scan=float(g.attrs["r_scan"]), n_max=int(g.attrs["n_max"]),
                    n_evals=int(g.attrs["n_evals"]))  # fmt: skip
     return out
+
+
+def manifold_scan_summary(path: str | Path) -> dict[str, Any] | None:
+    """What the seed scan stored in a basins file holds, whatever its key: ``grid``
+    (n1, n2), ``seeds``, ``edges``, ``n_evals``; None without one (for reports)."""
+    with h5py.File(path, "r", libver="latest", swmr=True) as h5:
+        g = h5.get(f"basins/{SCAN_GROUP}")
+        if g is None:
+            return None
+        return {"grid": tuple(int(k) for k in g["closest"].shape), "seeds": len(g["uv"]),
+                "edges": len(g["edge_n"]), "n_evals": int(g.attrs["n_evals"])}  # fmt: skip
