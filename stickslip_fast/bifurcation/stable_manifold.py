@@ -9,7 +9,6 @@ plane start as it is, then crossing to crossing on the section). See docs/basins
 from __future__ import annotations
 
 import functools
-import json
 import math
 import os
 from typing import Any
@@ -227,23 +226,12 @@ def manifold_seeds(
     return out
 
 
-def _exact(obj: Any) -> Any:
-    """``obj`` for a JSON key that tells every float bit apart (floats as hex)."""
-    if isinstance(obj, dict):
-        return {str(k): _exact(v) for k, v in sorted(obj.items())}
-    if isinstance(obj, (list, tuple, np.ndarray)):
-        return [_exact(v) for v in np.asarray(obj, dtype=object).tolist()] if len(obj) else []
-    if isinstance(obj, (bool, np.bool_, str)) or obj is None:
-        return obj if not isinstance(obj, np.bool_) else bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    return float(obj).hex()
-
-
 def _scan_key(target: Any, orbit: Any, scan_kw: dict, plane_kw: dict) -> str:
     """What a seed scan depends on, as text: the plane (system, base, directions, box, or
     the map's grid), the saddle orbit, the scan's arguments and the tolerances, and the
     package's version (another version may scan otherwise)."""
+    from ..io.base import config_digest
+
     system, b, dirs, box, result = _plane_of(target, plane_kw["plane"], plane_kw["base"],
                                              plane_kw["bounds"])  # fmt: skip
     key = {
@@ -254,7 +242,9 @@ def _scan_key(target: Any, orbit: Any, scan_kw: dict, plane_kw: dict) -> str:
         "scan": scan_kw, "rtol": plane_kw["rtol"], "atol": plane_kw["atol"],
         "package_version": package_version(),
     }  # fmt: skip
-    return json.dumps(_exact(key), sort_keys=True)
+    # the configuration files' canonical JSON: floats in their shortest repr, which tells
+    # every float bit apart
+    return config_digest(key)[0]
 
 
 def _scan_once(target: Any, orbit: Any, result: Any, store: bool, kw: dict, plane_kw: dict):

@@ -49,9 +49,9 @@ complete (rewritten whole on a re-run, keeping ``boundary`` and ``edge``)::
                                seed, edge, end, axis, g1, g2 scales; uv (seed, axis),
                                n, target, residual, distance (seed); edges (edge, end,
                                axis), edge_n, edge_target, edge_status (edge); closest
-                               (g1, g2); attrs r_scan, n_max, n_evals, key (JSON of
-                               the scan's inputs, floats as hex: it is used again
-                               only for the same key)
+                               (g1, g2); attrs r_scan, n_max, n_evals, key (the
+                               canonical JSON of the scan's inputs, as a config's:
+                               it is used again only for the same key)
       boundary_progress/       (only while a refinement is unfinished) the brackets
                                after the last completed bisection step: u_a, v_a,
                                u_b, v_b, status; attrs config (JSON: tol,
