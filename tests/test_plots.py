@@ -12,7 +12,12 @@ import pytest
 import stickslip_fast as ssf
 from stickslip_fast.analysis import largest_lyapunov, sync_error
 from stickslip_fast.cli.config import load_config
-from stickslip_fast.io import ConfigMismatchError, read_trajectory, write_trajectory
+from stickslip_fast.io import (
+    ConfigMismatchError,
+    read_trajectory,
+    read_trajectory_header,
+    write_trajectory,
+)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPTS = os.path.join(ROOT, "scripts")
@@ -57,6 +62,9 @@ def test_trajectory_roundtrip_and_xarray(tmp_path):
     assert back["status"] == res.status and back["period"] == res.period
     assert back["system"] == res.system and back["title"] == "t"
     assert back["result"].n_steps == res.n_steps
+    head = read_trajectory_header(path)  # the report's reader: no arrays
+    assert (head["n_samples"], head["n_points"]) == (len(res.t), len(res.t_poincare))
+    assert head["state_names"] == res.state_names and head["config"] == back["config"]
     with h5py.File(path, "r") as h5:
         assert h5.attrs["schema_version"] == 1 and h5.attrs["kind"] == "trajectory"
         assert json.loads(h5.attrs["config"])["settings"]["t_end"] == 600.0

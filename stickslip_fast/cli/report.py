@@ -108,10 +108,10 @@ def _report(path, verify: bool = False) -> str:
     checked against their SHA-256; a damaged file raises
     :class:`~stickslip_fast.io.ResultFileError` after the summary is printed.
     """
-    from ..io import file_kind, read_trajectory, sweep_summary, verify_sweep, writer_alive
+    from ..io import file_kind, read_trajectory_header, sweep_summary, verify_sweep, writer_alive
 
     if file_kind(path) == "trajectory":
-        return _trajectory_report(path, read_trajectory(path))
+        return _trajectory_report(path, read_trajectory_header(path))
     text, has_fletcher = _sweep_report(path, sweep_summary(path))
     if not verify:
         return text
@@ -164,7 +164,8 @@ def _sweep_report(path, info: dict) -> tuple[str, bool]:
 
 
 def _trajectory_report(path, tr: dict) -> str:
-    """The summary of a single-run file written by ``simulate -o`` (from ``read_trajectory``)."""
+    """The summary of a single-run file written by ``simulate -o`` (from
+    ``read_trajectory_header``: its arrays are not read)."""
     a, cfg = tr["attrs"], tr["config"]
     st = cfg.get("settings", {})
     lines = _header(f"{path} (single run, simulate -o)", a, cfg)
@@ -179,10 +180,10 @@ def _trajectory_report(path, tr: dict) -> str:
         f"{int(a['n_steps'])} steps ({int(a['n_rejected'])} rejected), "
         f"{int(a['n_crossings'])} Poincare crossings"
     )
-    n_t = len(tr["t"])
+    n_t = tr["n_samples"]
     sample = cfg.get("sample_dt")
     lines.append(
-        f"data:      {len(tr['poincare'])} Poincare points, {n_t} samples"
+        f"data:      {tr['n_points']} Poincare points, {n_t} samples"
         + (f" every {sample:g}" if n_t and sample else "")
         + f"; state {', '.join(tr['state_names'])}"
     )

@@ -107,6 +107,7 @@ from .sweepfile import (  # noqa: F401
 from .trajectory import (  # noqa: F401
     _jsonable,
     read_trajectory,
+    read_trajectory_header,
     write_trajectory,
 )
 from .verify import _data_fields, scan_sweep, stored_config  # noqa: F401
@@ -131,6 +132,7 @@ __all__ = [
     "ANALYSIS_FIELDS",
     "write_trajectory",
     "read_trajectory",
+    "read_trajectory_header",
     "CensusLayout",
     "CensusFile",
     "read_census",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -150,6 +151,36 @@ def _write_trajectory_file(h5: h5py.File, result: Any, text, digest, title, note
         d.attrs["description"] = desc
 
 
+def _read(path: str | Path, body: Callable[[h5py.File], Any]) -> tuple[dict, list[str], Any]:
+    """(root attributes with numbers as Python numbers, state names, ``body(h5)``) of a
+    single-run file (ResultFileError for another file, or a damaged one)."""
+    with open_h5(path) as h5:
+        if h5.attrs.get("schema_version") != SCHEMA_VERSION or h5.attrs.get("kind") != "trajectory":
+            raise ResultFileError(f"{path}: not a stickslip_fast trajectory file")
+        try:
+            attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
+            names = [s.decode() if isinstance(s, bytes) else str(s) for s in h5["state"][...]]
+            return attrs, names, body(h5)
+        except (OSError, RuntimeError, KeyError) as exc:
+            raise ResultFileError(f"{path}: corrupted ({_short(exc)})") from None
+
+
+def read_trajectory_header(path: str | Path) -> dict[str, Any]:
+    """What a summary of a single-run file needs, without reading its arrays: ``attrs``,
+    ``config`` (parsed), ``state_names``, ``n_samples`` and ``n_points``.
+
+    Raises
+    ------
+    ValueError
+        If the file is not a trajectory file of this schema.
+    """
+    attrs, names, (n_samples, n_points) = _read(
+        path, lambda h5: (h5["t"].shape[0], h5["poincare"].shape[0])
+    )
+    return {"attrs": attrs, "config": json.loads(attrs["config"]), "state_names": names,
+            "n_samples": int(n_samples), "n_points": int(n_points)}  # fmt: skip
+
+
 def read_trajectory(path: str | Path) -> dict[str, Any]:
     """Read a file written by :func:`write_trajectory`.
 
@@ -175,17 +206,8 @@ def read_trajectory(path: str | Path) -> dict[str, Any]:
     from ..core.settings import Settings
     from ..model.system import System
 
-    with open_h5(path) as h5:
-        if h5.attrs.get("schema_version") != SCHEMA_VERSION or h5.attrs.get("kind") != "trajectory":
-            raise ResultFileError(f"{path}: not a stickslip_fast trajectory file")
-        try:
-            attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in h5.attrs.items()}
-            data = {
-                name: h5[name][...] for name in ("t", "y", "t_poincare", "poincare", "final_state")
-            }
-            names = [s.decode() if isinstance(s, bytes) else str(s) for s in h5["state"][...]]
-        except (OSError, RuntimeError, KeyError) as exc:
-            raise ResultFileError(f"{path}: corrupted ({_short(exc)})") from None
+    fields = ("t", "y", "t_poincare", "poincare", "final_state")
+    attrs, names, data = _read(path, lambda h5: {name: h5[name][...] for name in fields})
     config = json.loads(attrs["config"])
     system = System.from_dict(config["system"])
     result = SimulationResult(
