@@ -19,6 +19,12 @@ t 1500, points after 1000, atol = 0.01 rtol, as in the benchmark):
    state ``lead`` before it. Its state at the jump tells which event it is (disk 1's slip
    ``v_b - x1'`` and its rotation ``phi1'``).
 
+4. **The ladders at two absolute tolerances** (``--ladder-atol``): each solver's point
+   error and time (best of 5, one core, warm) along rtol 1e-6 ... 3e-9, with atol = 0.01
+   rtol (the benchmark's rule) and with atol = 1e-4 rtol, which weighs the creep speeds
+   of the stick band (of the order of eps) more: the engine's Rodas5P and ``auto``, and
+   numbalsoda's LSODA when it imports.
+
 Result: ``results/breakaway_error_<date>.json`` (``--out``), with the machine.
 
     python3 -m benchmarks.breakaway_error [--eta 2.0] [--rtol 3e-7 1e-7 3e-8]
@@ -32,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import peers
 from .common import machine_info, ssf, write_result
 from .reference import trajectory_reference
 
@@ -39,10 +46,12 @@ RESULTS = Path(__file__).resolve().parent / "results"
 T_END, T_TRANSIENT = 1500.0, 1000.0
 TIGHT = dict(rtol=1e-12, atol=1e-14)
 LEADS = (0.1, 0.03, 0.01, 0.003, 0.0)
+LADDER = (1e-6, 3e-7, 1e-7, 3e-8, 1e-8, 3e-9)
 
 
-def _run(system, rtol, method, t_transient=T_TRANSIENT, **kw):
-    return ssf.simulate(system, T_END, t_transient, rtol=rtol, atol=0.01 * rtol,
+def _run(system, rtol, method, t_transient=T_TRANSIENT, atol=None, **kw):
+    atol = 0.01 * rtol if atol is None else atol
+    return ssf.simulate(system, T_END, t_transient, rtol=rtol, atol=atol,
                         max_points=10_000, method=method, **kw)  # fmt: skip
 
 
@@ -112,12 +121,56 @@ def study(eta: float, rtol: float, method: str, dt: float, log) -> dict:
     return row
 
 
+def _best_of(fn, *args, repeats: int = 5) -> float:
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn(*args)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def ladders(eta: float, atol_factor: float, log) -> dict:
+    """Point error and time of each solver along :data:`LADDER` at atol = factor * rtol."""
+    system = ssf.System.preset("asymmetric", eta=eta)
+    ref = np.asarray(trajectory_reference(eta, T_END, T_TRANSIENT, log=lambda *a: None)["points"])
+    p = peers.params(system.to_dict())
+    runners = {
+        m: (lambda rtol, m=m: _run(system, rtol, m, atol=atol_factor * rtol).poincare)
+        for m in ("rodas5p", "auto")
+    }
+    if peers.numbalsoda_available()[0]:
+        runners["numbalsoda LSODA"] = lambda rtol: peers.numbalsoda_run(
+            p, T_END, T_TRANSIENT, rtol, atol_factor * rtol
+        )[2]
+    out = {}
+    for name, run in runners.items():
+        rows = []
+        for rtol in LADDER:
+            pts = np.asarray(run(rtol)).reshape(-1, 4)
+            err = float(np.abs(pts - ref).max()) if pts.shape == ref.shape else np.inf
+            rows.append(dict(rtol=rtol, error=err, time=_best_of(run, rtol)))
+        out[name] = rows
+        log(
+            f"  eta {eta} atol {atol_factor:g} rtol, {name}: "
+            + "  ".join(f"{r['rtol']:g}: {r['error']:.1e} {r['time'] * 1e3:.1f} ms" for r in rows)
+        )
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--eta", type=float, nargs="*", default=[2.0, 9.99])
     ap.add_argument("--rtol", type=float, nargs="*", default=[3e-7, 1e-7, 3e-8, 1e-8])
     ap.add_argument("--method", nargs="*", default=["rodas5p", "auto"])
     ap.add_argument("--dt", type=float, default=1e-4, help="sample step within a period")
+    ap.add_argument(
+        "--ladder-atol",
+        type=float,
+        nargs="*",
+        default=[0.01, 1e-4],
+        help="atol / rtol of the ladders (none: skip them)",
+    )
     ap.add_argument(
         "--out", type=Path, default=RESULTS / f"breakaway_error_{time.strftime('%Y-%m-%d')}.json"
     )
@@ -130,8 +183,10 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     rows = [study(eta, rtol, m, args.dt, log)
             for eta in args.eta for m in args.method for rtol in args.rtol]  # fmt: skip
+    ladder = {f"{f:g}": {f"{eta:g}": ladders(eta, f, log) for eta in args.eta}
+              for f in args.ladder_atol}  # fmt: skip
     result = dict(machine=machine_info(), started=started, rows=rows, dt=args.dt,
-                  wall=time.perf_counter() - t0)  # fmt: skip
+                  ladders=ladder, wall=time.perf_counter() - t0)  # fmt: skip
     write_result(args.out, result, log)
     return 0
 
