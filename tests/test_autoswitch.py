@@ -165,6 +165,34 @@ def test_auto_on_two_disks_with_a_dc_motor_matches_rodas5p():
     assert a.switching["to_stiff"] > 0 and a.switching["to_explicit"] > 0
 
 
+@pytest.mark.parametrize(
+    "preset, eta, rtol",
+    [("literature", 6.0, 1e-6), ("asymmetric", 9.99, 1e-5), ("symmetric", 9.0, 1e-5)],
+)
+def test_auto_does_not_chatter_in_the_stick_band(preset, eta, rtol):
+    """Hairer's secant estimate missed the stick band's stiffness here: DOPRI5 chattered
+    about the band with steps ~1e-4 and ran out of 2e7 steps (literature set: 6 s, where
+    Rodas5P takes 1159 steps and 2 ms). The Jacobian probe and the busy count switch."""
+    system = ssf.System.preset(preset, eta=eta)
+    kw = dict(rtol=rtol, atol=0.01 * rtol, max_steps=200_000)
+    a = ssf.simulate(system, 1000.0, 500.0, method="auto", **kw)
+    r = ssf.simulate(system, 1000.0, 500.0, method="rodas5p", **kw)
+    assert a.status == r.status == "ok"
+    attempts = a.switching["attempts_explicit"] + a.switching["attempts_rosenbrock"]
+    assert attempts < 20 * (r.n_steps + r.n_rejected)
+    assert a.switching["to_stiff"] > 0
+
+
+def test_auto_takes_the_rosenbrock_method_in_the_stick_band_from_the_start():
+    """From rest on a moving belt the disk sticks at once (Jacobian eigenvalue ~ -1e5):
+    at rtol 1e-5 the explicit method used to take 10^6 steps in the first 20 time units."""
+    system = ssf.System.preset("asymmetric", eta=9.99)
+    a = ssf.simulate(system, 20.0, rtol=1e-5, atol=1e-7, method="auto", max_steps=200_000)
+    assert a.status != "max-steps"
+    assert a.switching["steps_explicit"] < 1000
+    assert a.switching["steps_rosenbrock"] > 0
+
+
 def test_auto_settings():
     system = ssf.System.preset("asymmetric")
     with pytest.raises(ValueError, match="not used by 'auto'"):
