@@ -193,6 +193,25 @@ def test_auto_takes_the_rosenbrock_method_in_the_stick_band_from_the_start():
     assert a.switching["steps_rosenbrock"] > 0
 
 
+def test_auto_does_not_switch_to_and_fro_every_few_steps():
+    """A case of the classification corpus (literature set, two disks on a constant belt,
+    eta = 9.88): disk 1 sticks (Jacobian radius ~1e7) while disk 2 slides fast. The stiff
+    mode's calm test passed on its first, tiny steps and the probe switched back at once:
+    2.5e5 switches each way and out of steps. A short explicit stretch now doubles the calm
+    steps the next stiff stretch needs."""
+    import classification_corpus as cc
+
+    cases = cc.random_cases(100, 11, "literature")
+    drive, n_osc, eta, y0 = next(c for c in cases if c[1] == 2 and abs(c[2] - 9.8836) < 1e-4)
+    system = cc.system_of(drive, n_osc, "literature").replace(eta=eta)
+    a = ssf.simulate(system, 800.0, y0=y0, method="auto", max_steps=200_000)
+    r = ssf.simulate(system, 800.0, y0=y0, method="rodas5p")
+    assert (a.status, a.period) == (r.status, r.period) == ("ok", 0)
+    assert a.switching["to_stiff"] < 1000
+    attempts = a.switching["attempts_explicit"] + a.switching["attempts_rosenbrock"]
+    assert attempts < 3 * (r.n_steps + r.n_rejected)
+
+
 def test_auto_settings():
     system = ssf.System.preset("asymmetric")
     with pytest.raises(ValueError, match="not used by 'auto'"):

@@ -21,7 +21,11 @@ workspace (:class:`AutoWorkspace`) carries the current mode:
   And :data:`TO_STIFF_BUSY` accepted steps with Hairer's ``h rho >``
   :data:`BUSY_HRHO` (a step below it halves the count) switch too: steps that keep
   a sizable fraction of the stability bound are held there by the fast mode, not by
-  accuracy. Where that was wrong, the stiff mode's own test switches back.
+  accuracy. Where that was wrong, the stiff mode's own test switches back. An
+  explicit stretch shorter than :data:`SHORT_RUN` steps doubles the calm steps the
+  next stiff stretch needs before it may switch back (up to :data:`MAX_HOLD`): with a
+  disk stuck and another sliding fast, the stiff mode's first steps are tiny, pass the
+  calm test, and the run would switch to and fro every few steps.
 - **Stiff mode** (Rodas5P, the same stages as ``method="rodas5p"``). After every
   accepted step one power iteration on the Jacobian by a finite difference of
   f (one more f evaluation, warm-started, so it converges over the steps) gives
@@ -86,6 +90,8 @@ __all__ = [
     "BUSY_HRHO",
     "TO_STIFF_BUSY",
     "PROBE_EVERY",
+    "SHORT_RUN",
+    "MAX_HOLD",
     "N_AUTO_FLAGS",
 ]
 
@@ -118,6 +124,11 @@ BUSY_HRHO = 0.5
 TO_STIFF_BUSY = 50
 #: Every this many accepted explicit steps, one power iteration on the Jacobian.
 PROBE_EVERY = 4
+#: An explicit stretch shorter than this many accepted steps doubles the calm steps
+#: the next stiff stretch needs before it may switch back (up to MAX_HOLD); a longer one
+#: restores TO_EXPLICIT_AFTER. It stops a run from switching to and fro every few steps.
+SHORT_RUN = 8
+MAX_HOLD = 1024
 
 
 def auto_method(
@@ -145,11 +156,11 @@ assert DOPRI5_METHOD.q == RODAS5P_METHOD.q == AUTO_METHOD.q
 assert DOPRI5_METHOD.P.shape[0] - 1 == RODAS5P_METHOD.H.shape[0]
 
 # slots of AutoWorkspace.flags (slot 0: the Jacobian is fresh, as in StepWorkspace)
-(A_MODE, A_N_STIFF, A_N_CALM, A_N_BUSY, A_TO_STIFF, A_TO_EXPLICIT, A_STEPS_ERK,
- A_STEPS_ROS, A_TRIES_ERK, A_TRIES_ROS) = range(1, 11)  # fmt: skip
+(A_MODE, A_N_STIFF, A_N_CALM, A_N_BUSY, A_RUN, A_HOLD, A_TO_STIFF, A_TO_EXPLICIT,
+ A_STEPS_ERK, A_STEPS_ROS, A_TRIES_ERK, A_TRIES_ROS) = range(1, 13)  # fmt: skip
 #: Size of AutoWorkspace.flags; the statistics are its last N_AUTO_STATS slots
 #: (read by :func:`.trajectory._run` on any workspace whose flags are this long).
-N_AUTO_FLAGS = 11
+N_AUTO_FLAGS = 13
 # slots of AutoWorkspace.fst
 A_H, A_HRHO = range(2)
 #: The statistics, in order (``flags[A_TO_STIFF:]``).
@@ -242,6 +253,19 @@ def _power_step(prob, y, f0, v, ytmp, fv) -> float:
 
 
 @njit(inline="always", **_JIT)
+def _stiff_direction(y1, y6, v) -> None:
+    """``v`` <- the unit vector along ``y1 - y6`` (the diagonal where they agree)."""
+    n = v.size
+    nv = 0.0
+    for i in range(n):
+        v[i] = y1[i] - y6[i]
+        nv += v[i] * v[i]
+    nv = math.sqrt(nv)
+    for i in range(n):
+        v[i] = v[i] / nv if nv > 0.0 else 1.0 / math.sqrt(n)
+
+
+@njit(inline="always", **_JIT)
 def _switch_mode(ist, mode, count_slot) -> None:
     """Enter ``mode`` (0 explicit, 1 Rosenbrock): count the switch, clear both step counts."""
     ist[A_MODE] = mode
@@ -249,6 +273,7 @@ def _switch_mode(ist, mode, count_slot) -> None:
     ist[A_N_STIFF] = 0
     ist[A_N_CALM] = 0
     ist[A_N_BUSY] = 0
+    ist[A_RUN] = 0
 
 
 @overload_call(stepper_init)
@@ -293,6 +318,7 @@ def _auto_accept(method, prob, lin, y, ws, modified):
             ist = ws.flags
             if ist[A_MODE] == 0:
                 ist[A_STEPS_ERK] += 1
+                ist[A_RUN] += 1
                 erk_accept(method.erk, prob, y, ws, modified)
                 hrho = ws.fst[A_HRHO]
                 if hrho > method.stiff_hrho:
@@ -306,25 +332,31 @@ def _auto_accept(method, prob, lin, y, ws, modified):
                     ist[A_N_BUSY] += 1
                 else:
                     ist[A_N_BUSY] //= 2
+                probed_stiff = False
                 if ist[A_STEPS_ERK] % method.probe_every == 0:
                     # the Jacobian's own spectral radius: K[0] is f(y) (FSAL)
                     rho = _power_step(prob, y, ws.K[0], ws.v, ws.ytmp, ws.fv)
-                    if ws.fst[A_H] * rho > method.stiff_hrho:
-                        ist[A_N_STIFF] = method.to_stiff_after
-                if ist[A_N_STIFF] >= method.to_stiff_after or ist[A_N_BUSY] >= method.to_stiff_busy:
-                    # to Rodas5P: f(y) is the FSAL stage; start the power iteration
-                    # on the stiff direction the estimate saw (y1 - y6)
+                    probed_stiff = ws.fst[A_H] * rho > method.stiff_hrho
+                if (
+                    probed_stiff
+                    or ist[A_N_STIFF] >= method.to_stiff_after
+                    or ist[A_N_BUSY] >= method.to_stiff_busy
+                ):
+                    # to Rodas5P: f(y) is the FSAL stage
+                    if ist[A_RUN] < SHORT_RUN:
+                        ist[A_HOLD] = min(2 * max(ist[A_HOLD], 1), MAX_HOLD)
+                    else:
+                        ist[A_HOLD] = 0
                     _switch_mode(ist, 1, A_TO_STIFF)
                     ws.flags[0] = 0
-                    nv = 0.0
                     for i in range(n):
                         ws.f0[i] = ws.K[0, i]
-                        d = ws.ynew[i] - ws.y6[i]
-                        ws.v[i] = d
-                        nv += d * d
-                    nv = math.sqrt(nv)
-                    for i in range(n):
-                        ws.v[i] = ws.v[i] / nv if nv > 0.0 else 1.0 / math.sqrt(n)
+                    if not probed_stiff:
+                        # start the power iteration on the stiff direction Hairer's
+                        # estimate saw (y1 - y6); after a probe, v is the Jacobian's own
+                        # (restarting there, its first estimates fell short and the
+                        # stiff mode switched back at once, 2.5e5 times in 150 units)
+                        _stiff_direction(ws.ynew, ws.y6, ws.v)
                 return
             ist[A_STEPS_ROS] += 1
             problem_f(prob, y, ws.f0)
@@ -334,7 +366,7 @@ def _auto_accept(method, prob, lin, y, ws, modified):
                 ist[A_N_CALM] += 1
             else:
                 ist[A_N_CALM] = 0
-            if ist[A_N_CALM] >= method.to_explicit_after:
+            if ist[A_N_CALM] >= max(method.to_explicit_after, ist[A_HOLD]):
                 _switch_mode(ist, 0, A_TO_EXPLICIT)
                 for i in range(n):
                     ws.K[0, i] = ws.f0[i]  # DOPRI5's first stage
