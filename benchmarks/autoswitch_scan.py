@@ -20,6 +20,7 @@ Result: ``results/autoswitch_scan_<date>.json`` (``--out``), with the machine.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import subprocess
@@ -37,6 +38,7 @@ DRIVES = ("constant", "dc-motor")
 DISKS = (1, 2)
 ETAS = (1.5, 3.0, 6.0, 9.0)
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6)
+METHODS = ("auto", "rodas5p")
 
 
 def scan(max_steps: int) -> list[dict]:
@@ -45,31 +47,25 @@ def scan(max_steps: int) -> list[dict]:
 
     package = ssf.__file__
     warnings.simplefilter("ignore")  # the synchronous-start warning of two disks
-    for drive in DRIVES:  # compile (or load) every kernel first: time runs, not compiles
-        for n in DISKS:
-            for m in ("auto", "rodas5p"):
-                system = ssf.System.preset("asymmetric", n_oscillators=n, drive=drive)
-                ssf.simulate(system, 1.0, method=m)
+    # compile (or load) every kernel first: time the runs, not the compiles
+    for drive, n, method in itertools.product(DRIVES, DISKS, METHODS):
+        ssf.simulate(ssf.System.preset("asymmetric", n_oscillators=n, drive=drive), 1.0,
+                     method=method)  # fmt: skip
     rows = []
-    for preset in PRESETS:
-        for drive in DRIVES:
-            for n in DISKS:
-                for eta in ETAS:
-                    system = ssf.System.preset(preset, eta=eta, n_oscillators=n, drive=drive)
-                    y0 = None
-                    if n == 2:
-                        y0 = np.zeros(system.n_state)
-                        y0[0] = 0.01
-                    for rtol in RTOLS:
-                        row = dict(preset=preset, drive=drive, n=n, eta=eta, rtol=rtol,
-                                   package=package)  # fmt: skip
-                        for m in ("auto", "rodas5p"):
-                            t0 = time.perf_counter()
-                            r = ssf.simulate(system, 1000.0, 500.0, y0=y0, rtol=rtol,
-                                             atol=0.01 * rtol, method=m, max_steps=max_steps)  # fmt: skip
-                            row[m] = dict(status=r.status, period=int(r.period),
-                                          time=time.perf_counter() - t0, steps=int(r.n_steps))  # fmt: skip
-                        rows.append(row)
+    for preset, drive, n, eta, rtol in itertools.product(PRESETS, DRIVES, DISKS, ETAS, RTOLS):
+        system = ssf.System.preset(preset, eta=eta, n_oscillators=n, drive=drive)
+        y0 = None
+        if n == 2:  # the disks 0.01 apart in x1
+            y0 = np.zeros(system.n_state)
+            y0[0] = 0.01
+        row = dict(preset=preset, drive=drive, n=n, eta=eta, rtol=rtol, package=package)
+        for method in METHODS:
+            t0 = time.perf_counter()
+            r = ssf.simulate(system, 1000.0, 500.0, y0=y0, rtol=rtol, atol=0.01 * rtol,
+                             method=method, max_steps=max_steps)  # fmt: skip
+            row[method] = dict(status=r.status, period=int(r.period),
+                               time=time.perf_counter() - t0, steps=int(r.n_steps))  # fmt: skip
+        rows.append(row)
     return rows
 
 

@@ -353,9 +353,8 @@ def _auto_accept(method, prob, lin, y, ws, modified):
                         ws.f0[i] = ws.K[0, i]
                     if not probed_stiff:
                         # start the power iteration on the stiff direction Hairer's
-                        # estimate saw (y1 - y6); after a probe, v is the Jacobian's own
-                        # (restarting there, its first estimates fell short and the
-                        # stiff mode switched back at once, 2.5e5 times in 150 units)
+                        # estimate saw (y1 - y6); after a probe, v is already the
+                        # Jacobian's own iterate and is kept
                         _stiff_direction(ws.ynew, ws.y6, ws.v)
                 return
             ist[A_STEPS_ROS] += 1
