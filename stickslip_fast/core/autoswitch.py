@@ -22,8 +22,9 @@ workspace (:class:`AutoWorkspace`) carries the current mode:
   :data:`BUSY_HRHO` (a step below it halves the count) switch too: steps that keep
   a sizable fraction of the stability bound are held there by the fast mode, not by
   accuracy. Where that was wrong, the stiff mode's own test switches back. An
-  explicit stretch shorter than :data:`SHORT_RUN` steps doubles the calm steps the
-  next stiff stretch needs before it may switch back (up to :data:`MAX_HOLD`): with a
+  explicit stretch shorter than :data:`SHORT_RUN` steps doubles a hold (1, 2, 4, ...,
+  up to :data:`MAX_HOLD`), and the next stiff stretch needs as many calm steps, at
+  least :data:`TO_EXPLICIT_AFTER`, before it may switch back: with a
   disk stuck and another sliding fast, the stiff mode's first steps are tiny, pass the
   calm test, and the run would switch to and fro every few steps.
 - **Stiff mode** (Rodas5P, the same stages as ``method="rodas5p"``). After every
@@ -104,7 +105,8 @@ _OVL = OVERLOAD
 AutoMethod = namedtuple(
     "AutoMethod",
     ["erk", "ros", "q", "stiff_hrho", "to_stiff_after", "reset_after", "explicit_hrho",
-     "to_explicit_after", "busy_hrho", "to_stiff_busy", "probe_every"],
+     "to_explicit_after", "busy_hrho", "to_stiff_busy", "probe_every", "short_run",
+     "max_hold"],
 )  # fmt: skip
 
 #: DOPRI5's stability boundary on the negative real axis (Hairer's test value).
@@ -124,10 +126,11 @@ BUSY_HRHO = 0.5
 TO_STIFF_BUSY = 50
 #: Every this many accepted explicit steps, one power iteration on the Jacobian.
 PROBE_EVERY = 4
-#: An explicit stretch shorter than this many accepted steps doubles the calm steps
-#: the next stiff stretch needs before it may switch back (up to MAX_HOLD); a longer one
-#: restores TO_EXPLICIT_AFTER. It stops a run from switching to and fro every few steps.
+#: An explicit stretch shorter than this many accepted steps doubles a hold (1, 2, 4, ...)
+#: and a longer one clears it; a stiff stretch needs max(TO_EXPLICIT_AFTER, hold) calm
+#: steps before it may switch back. It stops a run switching to and fro every few steps.
 SHORT_RUN = 8
+#: The largest hold.
 MAX_HOLD = 1024
 
 
@@ -140,12 +143,14 @@ def auto_method(
     busy_hrho: float = BUSY_HRHO,
     to_stiff_busy: int = TO_STIFF_BUSY,
     probe_every: int = PROBE_EVERY,
+    short_run: int = SHORT_RUN,
+    max_hold: int = MAX_HOLD,
 ) -> AutoMethod:
     """The switching method record (DOPRI5 and Rodas5P) with the given thresholds."""
     return AutoMethod(
         DOPRI5_METHOD, RODAS5P_METHOD, 5.0, float(stiff_hrho), int(to_stiff_after),
         int(reset_after), float(explicit_hrho), int(to_explicit_after), float(busy_hrho),
-        int(to_stiff_busy), int(probe_every),
+        int(to_stiff_busy), int(probe_every), int(short_run), int(max_hold),
     )  # fmt: skip
 
 
@@ -343,8 +348,8 @@ def _auto_accept(method, prob, lin, y, ws, modified):
                     or ist[A_N_BUSY] >= method.to_stiff_busy
                 ):
                     # to Rodas5P: f(y) is the FSAL stage
-                    if ist[A_RUN] < SHORT_RUN:
-                        ist[A_HOLD] = min(2 * max(ist[A_HOLD], 1), MAX_HOLD)
+                    if ist[A_RUN] < method.short_run:
+                        ist[A_HOLD] = min(2 * max(ist[A_HOLD], 1), method.max_hold)
                     else:
                         ist[A_HOLD] = 0
                     _switch_mode(ist, 1, A_TO_STIFF)
