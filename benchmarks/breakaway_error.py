@@ -33,13 +33,15 @@ Result: ``results/breakaway_error_<date>.json`` (``--out``), with the machine.
 from __future__ import annotations
 
 import argparse
+import functools
+import math
 import time
 from pathlib import Path
 
 import numpy as np
 
 from . import peers
-from .common import machine_info, ssf, write_result
+from .common import best_time, machine_info, ssf, write_result
 from .reference import trajectory_reference
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -121,15 +123,6 @@ def study(eta: float, rtol: float, method: str, dt: float, log) -> dict:
     return row
 
 
-def _best_of(fn, *args, repeats: int = 5) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn(*args)
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
 def ladders(eta: float, atol_factor: float, log) -> dict:
     """Point error and time of each solver along :data:`LADDER` at atol = factor * rtol."""
     system = ssf.System.preset("asymmetric", eta=eta)
@@ -149,7 +142,8 @@ def ladders(eta: float, atol_factor: float, log) -> dict:
         for rtol in LADDER:
             pts = np.asarray(run(rtol)).reshape(-1, 4)
             err = float(np.abs(pts - ref).max()) if pts.shape == ref.shape else np.inf
-            rows.append(dict(rtol=rtol, error=err, time=_best_of(run, rtol)))
+            best, _ = best_time(functools.partial(run, rtol), max_repeats=5, budget=math.inf)
+            rows.append(dict(rtol=rtol, error=err, time=best))
         out[name] = rows
         log(
             f"  eta {eta} atol {atol_factor:g} rtol, {name}: "
