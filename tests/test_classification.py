@@ -10,18 +10,20 @@ repeat).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
 import numpy as np
 import pytest
-from classification_corpus import SETTLED, compare, random_cases, run
+from classification_corpus import SETTLED, T_END, random_cases, run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import stickslip_fast as ssf
 from stickslip_fast.base.status import STATUS_NAMES
 from stickslip_fast.core.poincare import classify, still_settling, undecided
+from stickslip_fast.core.settings import PERIOD_TOL_MAX, Settings, period_tolerance
 
 ASYM = ssf.System.preset("asymmetric")
 SLIDING_ETAS = (1.0, 3.2, 4.0)
@@ -158,9 +160,17 @@ CORPUS_SIZE = 200
 CORPUS_SEED = 2026
 
 
+@functools.cache
+def _settled(preset: str, n_cases: int) -> tuple:
+    """The settled labels of a corpus, computed once for this module's tests."""
+    return tuple(run(random_cases(n_cases, CORPUS_SEED, preset), preset, **SETTLED))
+
+
 def test_corpus_default_labels_agree_with_settled_runs():
     cases = random_cases(CORPUS_SIZE, CORPUS_SEED)
-    default, settled, diff = compare(cases)
+    default = run(cases, t_end=T_END)
+    settled = list(_settled("asymmetric", CORPUS_SIZE))
+    diff = [k for k in range(len(cases)) if default[k] != settled[k]]
     # the corpus covers what it should: rest, orbits of several periods, both drives, N = 1, 2
     assert {s for s, _ in settled} >= {"equilibrium", "ok"}
     assert len({p for s, p in settled if s == "ok"}) >= 2
@@ -183,7 +193,8 @@ OTHER_PRESETS = [("literature", 100), ("symmetric", 100)]
 @pytest.mark.parametrize(("preset", "n_cases"), OTHER_PRESETS)
 def test_default_labels_on_the_other_parameter_sets_are_never_false(preset, n_cases):
     cases = random_cases(n_cases, CORPUS_SEED, preset)
-    default, settled, _ = compare(cases, preset)
+    default = run(cases, preset, t_end=T_END)
+    settled = list(_settled(preset, n_cases))
     # the corpus holds orbits with a period, and rest (equilibrium, or a stalled motor)
     assert any(s == "ok" and p > 0 for s, p in settled)
     assert any(s in ("equilibrium", "stalled") for s, _ in settled)
@@ -195,6 +206,50 @@ def test_default_labels_on_the_other_parameter_sets_are_never_false(preset, n_ca
             assert s[0] == "ok", case
         if d[0] in ("equilibrium", "stalled") or s[0] in ("equilibrium", "stalled"):
             assert d[0] == s[0] or d[0] == "unsettled", case
+
+
+# ------------------------------------------------------- loose tolerances
+def test_the_default_period_tolerance_is_capped_above_rtol_1e_8():
+    assert period_tolerance(1e-9) == pytest.approx(1e-5)  # the default rtol: untouched
+    assert period_tolerance(1e-8) == pytest.approx(1e-4)
+    for rtol in (1e-7, 1e-4, 1e-3, 1e-2):
+        assert period_tolerance(rtol) == PERIOD_TOL_MAX == 1e-4
+    assert Settings.resolve(t_end=10.0, rtol=1e-3).period_tol == 1e-4
+    assert Settings.resolve(t_end=10.0, rtol=1e-3, period_tol=0.5).period_tol == 0.5  # given: kept
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-4, 1e-5])
+def test_loose_tolerances_never_call_a_period_two_orbit_period_one(rtol):
+    # Fig. 6's period-2 orbit at eta = 6.0. With period_tol = 1e4 rtol (10, 1 and 0.1
+    # relative to 1 + max|point|) its two points "repeated" and both calls said period 1
+    system = ssf.System.preset("asymmetric", eta=6.0)
+    assert ssf.simulate(system, 3000.0, 2000.0).period == 2  # the default rtol
+    assert ssf.simulate(system, 3000.0, 2000.0, rtol=rtol).period == 2
+    sw = ssf.sweep(ASYM, "eta", [5.8, 6.5], t_end=3000.0, t_transient=2000.0, rtol=rtol)
+    assert list(sw.period) == [2, 2]
+
+
+def _false(label, settled) -> bool:
+    """A label that claims more than the settled run (benchmarks/loose_labels.py)."""
+    undecided_ = (label == ("ok", 0) and settled[0] == "ok") or label[0] == "unsettled"
+    return label != settled and not undecided_
+
+
+@pytest.mark.parametrize(
+    ("preset", "n_cases", "rtol"), [("asymmetric", CORPUS_SIZE, 1e-4), ("literature", 100, 1e-6)]
+)
+def test_loose_labels_on_the_corpus_are_not_false(preset, n_cases, rtol):
+    # uncapped, 90 of the 200 asymmetric cases at rtol 1e-4 and 43 of the 100 literature
+    # cases at rtol 1e-6 were false: slow transients, higher periods and aperiodic motion
+    # called periodic (docs/model.md, "Period")
+    cases = random_cases(n_cases, CORPUS_SEED, preset)
+    loose = run(cases, preset, t_end=T_END, rtol=rtol)
+    settled = _settled(preset, n_cases)
+    wrong = [(c[:3], a, b) for c, a, b in zip(cases, loose, settled, strict=True) if _false(a, b)]
+    assert wrong == []
+    # and most labels are the settled ones (75 of 100 and 200 of 200 measured; the rest
+    # of the literature set's are period 0, "none found", where it attracts slowly)
+    assert sum(a == b for a, b in zip(loose, settled, strict=True)) >= 0.7 * n_cases
 
 
 @st.composite

@@ -220,7 +220,7 @@ def classify_census(
         relative to 1 + the largest |coordinate|, as the period detection);
         equilibria and stalls when their final states agree so. Default
         ``100 * period_tol`` (1e-3 at the default rtol 1e-9: period_tol is
-        1e4 rtol).
+        1e4 rtol, at most 1e-4).
     track_threshold : float
         Largest distance for two attractors at neighbouring values to be one
         track: the Hausdorff distance of their point sets (max norm), each

@@ -92,7 +92,8 @@ CLASSIFY_PARAMS_DOC = """
         never counts. Default 1e-4, ten times the presets' eps: inside the
         friction law's stick band a "stuck" disk creeps at O(eps).
     period_tol : float, optional
-        Relative tolerance of the period detector (default 1e4 rtol).
+        Relative tolerance of the period detector (default 1e4 rtol, at most 1e-4:
+        :func:`period_tolerance`).
     stop : {"fixed", "converged"}
         ``"fixed"`` (default): run to ``t_end`` and record after ``t_transient``.
         ``"converged"``: watch the run from t = 0 (``t_transient`` is not used)
