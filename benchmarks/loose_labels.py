@@ -1,4 +1,4 @@
-"""Labels at loose tolerances: how the period tolerance's cap decides them.
+"""Labels at loose tolerances: the period tolerance's cap, and atol against eps.
 
 The period test calls the last points periodic when each lies within
 ``period_tol * (1 + max|point|)`` of the point ``p`` before it, and ``period_tol``
@@ -15,7 +15,11 @@ tolerance ``min(1e4 rtol, cap)`` for several caps, and sets each label against t
 - ``none found``: period 0 (``ok``, no period detected) where the settled run has one,
   or ``unsettled``: an honest "not found" or "not decided".
 
-    python3 -m benchmarks.loose_labels [--rtol 1e-3 1e-4 1e-5 1e-6] [--caps inf 1e-3 1e-4]
+Then the same corpus at the default (capped) period tolerance with atol from 1e-11 (the
+default) to 1e-5, the friction law's eps of the three sets, at rtol 1e-6 and 1e-3: how
+small atol must be against eps (:data:`stickslip_fast.model.system.ATOL_EPS_RATIO`).
+
+    python3 -m benchmarks.loose_labels [--rtol ...] [--caps inf 1e-3 1e-4] [--atols ...]
 
 Result: ``results/loose_labels_<date>.json``, with the machine.
 """
@@ -35,6 +39,8 @@ RESULTS = Path(__file__).resolve().parent / "results"
 CORPUS = (("asymmetric", 200, 2026), ("literature", 100, 2026), ("symmetric", 100, 2026))
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
 CAPS = (math.inf, 1e-3, 1e-4)
+ATOLS = (1e-11, 1e-8, 1e-7, 1e-6, 1e-5)
+ATOL_RTOLS = (1e-6, 1e-3)
 
 
 def corpus():
@@ -62,6 +68,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rtol", type=float, nargs="*", default=list(RTOLS))
     ap.add_argument("--caps", type=float, nargs="*", default=list(CAPS))
+    ap.add_argument("--atols", type=float, nargs="*", default=list(ATOLS))
     ap.add_argument(
         "--out", type=Path, default=RESULTS / f"loose_labels_{time.strftime('%Y-%m-%d')}.json"
     )
@@ -74,16 +81,19 @@ def main(argv=None) -> int:
     for preset, n, seed in CORPUS:
         cases = cc.random_cases(n, seed, preset)
         settled = cc.run(cases, preset, **cc.SETTLED)
-        for rtol in args.rtol:
-            for cap in args.caps:
-                ptol = min(1e4 * rtol, cap)
-                labels = cc.run(cases, preset, t_end=cc.T_END, rtol=rtol, period_tol=ptol)
-                v = [verdict(a, b) for a, b in zip(labels, settled, strict=True)]
-                row = dict(preset=preset, rtol=rtol, cap=cap, period_tol=ptol, cases=n,
-                           **{k: v.count(k) for k in ("same", "false", "none found")})  # fmt: skip
-                rows.append(row)
-                print(f"{preset:10s} rtol {rtol:g} period_tol {ptol:g}: same {row['same']}, "
-                      f"false {row['false']}, none found {row['none found']}", flush=True)  # fmt: skip
+        grid = [
+            dict(rtol=r, cap=c, period_tol=min(1e4 * r, c)) for r in args.rtol for c in args.caps
+        ]
+        grid += [dict(rtol=r, atol=a) for r in ATOL_RTOLS for a in args.atols]
+        for point in grid:
+            kw = {k: v for k, v in point.items() if k != "cap"}
+            labels = cc.run(cases, preset, t_end=cc.T_END, **kw)
+            v = [verdict(a, b) for a, b in zip(labels, settled, strict=True)]
+            row = dict(preset=preset, cases=n, **point,
+                       **{k: v.count(k) for k in ("same", "false", "none found")})  # fmt: skip
+            rows.append(row)
+            print(f"{preset:10s} {kw}: same {row['same']}, false {row['false']}, "
+                  f"none found {row['none found']}", flush=True)  # fmt: skip
     result = dict(machine=machine_info(), started=started, rows=rows,
                   wall=time.perf_counter() - t0)  # fmt: skip
     write_result(args.out, result)

@@ -55,7 +55,13 @@ from .bifurcation.stable_manifold import manifold_seeds, stable_manifold
 from .bifurcation.synchrony import SyncStability, sync_stability
 from .core.poincare import STATUS_NAMES
 from .core.trajectory import METHODS
-from .model.system import PRESETS, SWEEPABLE, SynchronousStartWarning, System
+from .model.system import (
+    PRESETS,
+    SWEEPABLE,
+    CoarseToleranceWarning,
+    SynchronousStartWarning,
+    System,
+)
 
 __version__ = package_version()
 
@@ -64,6 +70,7 @@ __all__ = [
     "simulate",
     "SimulationResult",
     "SynchronousStartWarning",
+    "CoarseToleranceWarning",
     "sweep",
     "SweepResult",
     "load_sweep",

@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -250,6 +251,28 @@ def test_loose_labels_on_the_corpus_are_not_false(preset, n_cases, rtol):
     # and most labels are the settled ones (75 of 100 and 200 of 200 measured; the rest
     # of the literature set's are period 0, "none found", where it attracts slowly)
     assert sum(a == b for a, b in zip(loose, settled, strict=True)) >= 0.7 * n_cases
+
+
+def test_an_atol_near_eps_is_warned_of_where_labels_are_made():
+    # atol = 1e-2 eps left 4-26 of the corpus's 200 asymmetric labels false, 1e-1 eps
+    # 61-80 (benchmarks/loose_labels.py; docs/model.md, "atol and the stick band")
+    sys_ = ssf.System.preset("asymmetric")  # eps = 1e-5
+    kw = dict(t_end=50.0, rtol=1e-6)
+    with pytest.warns(ssf.CoarseToleranceWarning, match=r"atol = 1e-07 .* eps = 1e-05") as rec:
+        ssf.simulate(sys_, atol=1e-7, **kw)
+    assert rec[0].filename == __file__  # points at the caller
+    with pytest.warns(ssf.CoarseToleranceWarning, match="atol <= 1e-08"):
+        ssf.sweep(sys_, "eta", [2.0, 3.0], atol=1e-6, **kw)
+    with pytest.warns(ssf.CoarseToleranceWarning):
+        ssf.census(sys_, "eta", [2.0], n_starts=2, atol=1e-6, **kw)
+    # a swept eps: judged by its smallest value (atol 1e-9 > 1e-3 * 1e-7)
+    with pytest.warns(ssf.CoarseToleranceWarning, match="eps = 1e-07"):
+        ssf.sweep(sys_, "eps", [1e-5, 1e-7], atol=1e-9, **kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ssf.CoarseToleranceWarning)
+        ssf.simulate(sys_, **kw)  # the default atol 1e-11
+        ssf.simulate(sys_, atol=1e-8, **kw)  # 1e-3 eps: allowed
+        ssf.sweep(sys_, "eps", [1e-5, 1e-7], atol=1e-10, **kw)
 
 
 @st.composite

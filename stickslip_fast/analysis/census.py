@@ -34,7 +34,13 @@ import numpy as np
 from ..base.messages import plain
 from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
 from ..io import CENSUS_RUN_FIELDS, CensusLayout, read_census, write_census_classification
-from ..model.system import SWEEPABLE, System, warn_if_synchronous
+from ..model.system import (
+    SWEEPABLE,
+    System,
+    smallest_eps,
+    warn_if_coarse_atol,
+    warn_if_synchronous,
+)
 from .census_classify import (  # noqa: F401  (re-exported)
     _BACKENDS,
     _ST_EQ,
@@ -182,6 +188,7 @@ def census(
         max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
         period_tol=period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
+    warn_if_coarse_atol(smallest_eps(system, names, axes), settings.atol, stacklevel=2)
     config = _census_config(system, names, axes, start_arr, stop, settings, backend)
     if _config_extra:  # callers built on the census (basins) add their own fields
         config.update(_config_extra)

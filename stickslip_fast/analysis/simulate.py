@@ -38,7 +38,7 @@ from ..core.trajectory import (
     integrate,
     method_variant,
 )
-from ..model.system import System, warn_if_synchronous
+from ..model.system import System, warn_if_coarse_atol, warn_if_synchronous
 
 __all__ = [
     "simulate",
@@ -181,6 +181,7 @@ def simulate(
     y_init = system.initial_state(y0)
     if y0 is None:
         warn_if_synchronous(system, "the default start y0 (rest)", stacklevel=2)
+    warn_if_coarse_atol(system.eps, s.atol, stacklevel=2)
     if sample_dt is not None:
         sample_dt = check_real("sample_dt", sample_dt)
     bufs = _RunBuffers.allocate(system, s, sample_dt)

@@ -16,7 +16,13 @@ import numpy as np
 from ..base.messages import plain
 from ..core.settings import Settings, check_memory
 from ..io import ANALYSES, PER_VALUE_FIELDS, SweepLayout
-from ..model.system import SWEEPABLE, System, warn_if_synchronous
+from ..model.system import (
+    SWEEPABLE,
+    System,
+    smallest_eps,
+    warn_if_coarse_atol,
+    warn_if_synchronous,
+)
 from .simulate import WORKSPACE_VECTORS
 
 MODES = ("restart", "continuation", "continuation-both")
@@ -168,6 +174,7 @@ def _plan(system, param, values, mode, y0, analyses, settings: Settings) -> _Pla
         _warn_order(names[0], axes[0], mode)
     if y0 is None:
         warn_if_synchronous(system, "the default start y0 (rest)", stacklevel=3)
+    warn_if_coarse_atol(smallest_eps(system, names, axes), settings.atol, stacklevel=3)
     if settings.max_points == 0:
         warnings.warn(
             "max_points = 0: no Poincare points are kept, so no period is detected "
