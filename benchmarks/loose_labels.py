@@ -17,7 +17,7 @@ tolerance ``min(1e4 rtol, cap)`` for several caps, and sets each label against t
 
 Then the same corpus at the default (capped) period tolerance with atol from 1e-11 (the
 default) to 1e-5, the friction law's eps of the three sets, at rtol 1e-6 and 1e-3: how
-small atol must be against eps (:data:`stickslip_fast.model.system.ATOL_EPS_RATIO`).
+small atol must be against eps (:data:`stickslip_fast.core.settings.ATOL_EPS_RATIO`).
 
     python3 -m benchmarks.loose_labels [--rtol ...] [--caps inf 1e-3 1e-4] [--atols ...]
 
@@ -52,16 +52,6 @@ def corpus():
     return classification_corpus
 
 
-def verdict(label: tuple[str, int], settled: tuple[str, int]) -> str:
-    """``same``, ``none found`` (period 0 where the settled run has one, or
-    ``unsettled``: undecided) or ``false``."""
-    if label == settled:
-        return "same"
-    if (label == ("ok", 0) and settled[0] == "ok") or label[0] == "unsettled":
-        return "none found"
-    return "false"
-
-
 def main(argv=None) -> int:
     from .common import machine_info, write_result
 
@@ -88,7 +78,7 @@ def main(argv=None) -> int:
         for point in grid:
             kw = {k: v for k, v in point.items() if k != "cap"}
             labels = cc.run(cases, preset, t_end=cc.T_END, **kw)
-            v = [verdict(a, b) for a, b in zip(labels, settled, strict=True)]
+            v = [cc.verdict(a, b) for a, b in zip(labels, settled, strict=True)]
             row = dict(preset=preset, cases=n, **point,
                        **{k: v.count(k) for k in ("same", "false", "none found")})  # fmt: skip
             rows.append(row)

@@ -54,14 +54,9 @@ from .bifurcation.orbits import Equilibrium, Orbit, find_equilibrium, find_orbit
 from .bifurcation.stable_manifold import manifold_seeds, stable_manifold
 from .bifurcation.synchrony import SyncStability, sync_stability
 from .core.poincare import STATUS_NAMES
+from .core.settings import CoarseToleranceWarning
 from .core.trajectory import METHODS
-from .model.system import (
-    PRESETS,
-    SWEEPABLE,
-    CoarseToleranceWarning,
-    SynchronousStartWarning,
-    System,
-)
+from .model.system import PRESETS, SWEEPABLE, SynchronousStartWarning, System
 
 __version__ = package_version()
 

@@ -66,6 +66,17 @@ def run(cases, preset: str = "asymmetric", **settings) -> list[tuple[str, int]]:
     return out  # type: ignore[return-value]
 
 
+def verdict(label: tuple[str, int], settled: tuple[str, int]) -> str:
+    """``same``, ``false`` (claims more than the settled run: another period, rest where
+    it moves, motion where it rests) or ``none found`` (period 0 where the settled run
+    has one, or ``unsettled``: an honest "not found" or "not decided")."""
+    if label == settled:
+        return "same"
+    if (label == ("ok", 0) and settled[0] == "ok") or label[0] == "unsettled":
+        return "none found"
+    return "false"
+
+
 def compare(cases, preset: str = "asymmetric") -> tuple[list, list, list]:
     """(default labels, settled labels, indices of the cases that disagree)."""
     default = run(cases, preset, t_end=T_END)

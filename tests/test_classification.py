@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 import pytest
-from classification_corpus import SETTLED, T_END, random_cases, run
+from classification_corpus import SETTLED, T_END, random_cases, run, verdict
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -230,12 +230,6 @@ def test_loose_tolerances_never_call_a_period_two_orbit_period_one(rtol):
     assert list(sw.period) == [2, 2]
 
 
-def _false(label, settled) -> bool:
-    """A label that claims more than the settled run (benchmarks/loose_labels.py)."""
-    undecided_ = (label == ("ok", 0) and settled[0] == "ok") or label[0] == "unsettled"
-    return label != settled and not undecided_
-
-
 @pytest.mark.parametrize(
     ("preset", "n_cases", "rtol"), [("asymmetric", CORPUS_SIZE, 1e-4), ("literature", 100, 1e-6)]
 )
@@ -246,7 +240,11 @@ def test_loose_labels_on_the_corpus_are_not_false(preset, n_cases, rtol):
     cases = random_cases(n_cases, CORPUS_SEED, preset)
     loose = run(cases, preset, t_end=T_END, rtol=rtol)
     settled = _settled(preset, n_cases)
-    wrong = [(c[:3], a, b) for c, a, b in zip(cases, loose, settled, strict=True) if _false(a, b)]
+    wrong = [
+        (c[:3], a, b)
+        for c, a, b in zip(cases, loose, settled, strict=True)
+        if verdict(a, b) == "false"
+    ]
     assert wrong == []
     # and most labels are the settled ones (75 of 100 and 200 of 200 measured; the rest
     # of the literature set's are period 0, "none found", where it attracts slowly)

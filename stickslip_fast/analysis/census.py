@@ -32,13 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from ..base.messages import plain
-from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
+from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings, warn_if_coarse_atol
 from ..io import CENSUS_RUN_FIELDS, CensusLayout, read_census, write_census_classification
 from ..model.system import (
     SWEEPABLE,
     System,
     smallest_eps,
-    warn_if_coarse_atol,
     warn_if_synchronous,
 )
 from .census_classify import (  # noqa: F401  (re-exported)

@@ -21,6 +21,7 @@ from ..core.settings import (
     check_memory,
     check_real,
     period_tolerance,
+    warn_if_coarse_atol,
 )
 from ..core.trajectory import (
     F_AMPLITUDE,
@@ -38,7 +39,7 @@ from ..core.trajectory import (
     integrate,
     method_variant,
 )
-from ..model.system import System, warn_if_coarse_atol, warn_if_synchronous
+from ..model.system import System, warn_if_synchronous
 
 __all__ = [
     "simulate",

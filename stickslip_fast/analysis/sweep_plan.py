@@ -14,13 +14,12 @@ from typing import Any
 import numpy as np
 
 from ..base.messages import plain
-from ..core.settings import Settings, check_memory
+from ..core.settings import Settings, check_memory, warn_if_coarse_atol
 from ..io import ANALYSES, PER_VALUE_FIELDS, SweepLayout
 from ..model.system import (
     SWEEPABLE,
     System,
     smallest_eps,
-    warn_if_coarse_atol,
     warn_if_synchronous,
 )
 from .simulate import WORKSPACE_VECTORS

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +38,9 @@ __all__ = [
     "MAX_RTOL",
     "PERIOD_TOL_MAX",
     "period_tolerance",
+    "ATOL_EPS_RATIO",
+    "CoarseToleranceWarning",
+    "warn_if_coarse_atol",
     "check_real",
     "check_integer",
     "check_memory",
@@ -84,6 +88,39 @@ def period_tolerance(rtol: float) -> float:
     loose tolerances; there a period may go undetected (period 0) instead.
     """
     return min(max(PERIOD_TOL_FACTOR * rtol, 1e-9), PERIOD_TOL_MAX)
+
+
+#: Largest atol / eps that resolves the creep of a sticking disk. Over the classification
+#: corpus (benchmarks/loose_labels.py) atol = 1e-3 eps left 0-5 of 200 labels false
+#: per parameter set, as at the default atol; 1e-2 eps gave 4-26, 1e-1 eps 4-80.
+ATOL_EPS_RATIO = 1e-3
+
+
+class CoarseToleranceWarning(UserWarning):
+    """atol is not small against the friction law's eps.
+
+    A sticking disk creeps at slip speeds of the order of eps, and the error control
+    weighs a speed against ``atol + rtol |speed|``: with atol near eps the steps there are
+    free to get the creep wrong, and a run can come to rest, stop crossing or change
+    its period where a tighter run does not.
+    """
+
+
+def warn_if_coarse_atol(eps: float, atol: float, stacklevel: int) -> None:
+    """Warn (:class:`CoarseToleranceWarning`) if ``atol`` > :data:`ATOL_EPS_RATIO` ``eps``.
+
+    ``eps``: the smallest eps the call integrates with (a swept eps included).
+    """
+    if atol > ATOL_EPS_RATIO * eps:
+        warnings.warn(
+            f"atol = {atol:g} is not small against the friction law's eps = {eps:g} "
+            f"(atol > {ATOL_EPS_RATIO:g} eps): the creep of a sticking disk, of the order "
+            "of eps, is not resolved, and a run can come to rest, stop crossing or change "
+            "its period where a tighter one does not; use atol <= "
+            f"{ATOL_EPS_RATIO * eps:g} (the default is {DEFAULT_ATOL:g})",
+            CoarseToleranceWarning,
+            stacklevel=stacklevel + 1,
+        )
 
 
 # ------------------------------------------------------------------ checks

@@ -30,10 +30,7 @@ __all__ = [
     "dc_motor_constants",
     "SynchronousStartWarning",
     "warn_if_synchronous",
-    "CoarseToleranceWarning",
-    "warn_if_coarse_atol",
     "smallest_eps",
-    "ATOL_EPS_RATIO",
 ]
 
 DRIVES = ("constant", "dc-motor")
@@ -346,43 +343,10 @@ def warn_if_synchronous(system: System, what: str, stacklevel: int) -> None:
         )
 
 
-#: Largest atol / eps that resolves the creep of a sticking disk. Over the classification
-#: corpus (benchmarks/loose_labels.py) atol = 1e-3 eps left 0-5 of 200 labels false
-#: per parameter set, as at the default atol; 1e-2 eps gave 4-26, 1e-1 eps 4-80.
-ATOL_EPS_RATIO = 1e-3
-
-
-class CoarseToleranceWarning(UserWarning):
-    """atol is not small against the friction law's eps.
-
-    A sticking disk creeps at slip speeds of the order of eps, and the error control
-    weighs a speed against ``atol + rtol |speed|``: with atol near eps the steps there are
-    free to get the creep wrong, and a run can come to rest, stop crossing or change
-    its period where a tighter run does not.
-    """
-
-
 def smallest_eps(system: System, names=(), axes=()) -> float:
     """The smallest eps of ``system`` and of the swept values of ``names`` / ``axes``."""
     swept = [float(np.min(a)) for n, a in zip(names, axes, strict=True) if n == "eps" and len(a)]
     return min([system.eps, *swept])
-
-
-def warn_if_coarse_atol(eps: float, atol: float, stacklevel: int) -> None:
-    """Warn (:class:`CoarseToleranceWarning`) if ``atol`` > :data:`ATOL_EPS_RATIO` ``eps``.
-
-    ``eps``: the smallest eps the call integrates with (a swept eps included).
-    """
-    if atol > ATOL_EPS_RATIO * eps:
-        warnings.warn(
-            f"atol = {atol:g} is not small against the friction law's eps = {eps:g} "
-            f"(atol > {ATOL_EPS_RATIO:g} eps): the creep of a sticking disk, of the order "
-            "of eps, is not resolved, and a run can come to rest, stop crossing or change "
-            "its period where a tighter one does not; use atol <= "
-            f"{ATOL_EPS_RATIO * eps:g} (the default is 1e-11)",
-            CoarseToleranceWarning,
-            stacklevel=stacklevel + 1,
-        )
 
 
 def dc_motor_constants(
