@@ -27,17 +27,20 @@ Two ways, the first whenever it applies:
 
 from __future__ import annotations
 
+import _thread
+import contextlib
 import os
 import signal
 import socket
+import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numba
 import numpy as np
 
-__all__ = ["new_abort_flag", "call_interruptible"]
+__all__ = ["new_abort_flag", "call_interruptible", "lost_interrupts_raised"]
 
 
 try:  # the C function: signal.getsignal's conversion to an enum costs ~2 us a call
@@ -198,3 +201,42 @@ def _call_in_worker(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) 
     if "error" in box:
         raise box["error"]
     return box["value"]
+
+
+@contextlib.contextmanager
+def lost_interrupts_raised() -> Iterator[None]:
+    """Within: a Ctrl-C that Python reports as ignored is raised again.
+
+    SIGINT's ``KeyboardInterrupt`` can be raised inside a finaliser (``__del__``;
+    Numba's compiler runs many), where Python prints "Exception ignored" and goes on.
+    Inside a kernel call the watcher has set the flag all the same
+    (:func:`call_interruptible`), but between calls nothing was armed and the command
+    went on as if no key had been pressed. Here Python's hook for such exceptions
+    (:data:`sys.unraisablehook`) still reports it, and then has another thread signal
+    the main thread again a millisecond later (:func:`_thread.interrupt_main`, which
+    also writes the wakeup fd, so a kernel in flight stops on its flag). Signalled
+    from the hook itself, the interrupt would be raised inside the report and lost
+    again; one that lands in a finaliser once more is caught here once more. On the
+    way out the signals still due are waited for, so they land inside the block. The
+    command line uses it around each command; the hook is the process's, so a
+    library call does not install it.
+    """
+    previous = sys.unraisablehook
+    due: list[threading.Timer] = []
+
+    def hook(unraisable: Any) -> None:
+        previous(unraisable)
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            timer = threading.Timer(0.001, _thread.interrupt_main)
+            timer.daemon = True
+            due.append(timer)
+            timer.start()
+
+    sys.unraisablehook = hook
+    try:
+        yield
+    finally:
+        if sys.unraisablehook is hook:  # unless someone replaced it meanwhile
+            sys.unraisablehook = previous
+        for timer in due:
+            timer.join()

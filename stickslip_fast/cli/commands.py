@@ -285,12 +285,15 @@ def main(argv: list[str] | None = None) -> int:
     import warnings
 
     warnings.showwarning = _show_warning
+    from ..base.interrupt import lost_interrupts_raised
+
     if getattr(args, "quiet", False):
         from ..base import compile_notice
 
         compile_notice.set_enabled(False)
     try:
-        return int(args.func(args) or 0)
+        with lost_interrupts_raised():
+            return int(args.func(args) or 0)
     except KeyboardInterrupt:
         # the compiled work stops within about a second (interrupt.call_interruptible)
         return _interrupted(args)
