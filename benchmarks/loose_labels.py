@@ -18,6 +18,8 @@ tolerance ``min(1e4 rtol, cap)`` for several caps, and sets each label against t
 Then the same corpus at the default (capped) period tolerance with atol from 1e-11 (the
 default) to 1e-5, the friction law's eps of the three sets, at rtol 1e-6 and 1e-3: how
 small atol must be against eps (:data:`stickslip_fast.core.settings.ATOL_EPS_RATIO`).
+Last, converged stopping (the census's default) at rtol 1e-6 and 1e-4, uncapped and
+capped.
 
     python3 -m benchmarks.loose_labels [--rtol ...] [--caps inf 1e-3 1e-4] [--atols ...]
 
@@ -41,6 +43,7 @@ RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
 CAPS = (math.inf, 1e-3, 1e-4)
 ATOLS = (1e-11, 1e-8, 1e-7, 1e-6, 1e-5)
 ATOL_RTOLS = (1e-6, 1e-3)
+CONVERGED_RTOLS = (1e-6, 1e-4)
 
 
 def corpus():
@@ -75,6 +78,8 @@ def main(argv=None) -> int:
             dict(rtol=r, cap=c, period_tol=min(1e4 * r, c)) for r in args.rtol for c in args.caps
         ]
         grid += [dict(rtol=r, atol=a) for r in ATOL_RTOLS for a in args.atols]
+        grid += [dict(rtol=r, stop="converged", **({"period_tol": 1e4 * r} if raw else {}))
+                 for r in CONVERGED_RTOLS for raw in (True, False)]  # fmt: skip
         for point in grid:
             kw = {k: v for k, v in point.items() if k != "cap"}
             labels = cc.run(cases, preset, t_end=cc.T_END, **kw)
