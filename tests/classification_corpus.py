@@ -3,7 +3,7 @@
 Each case is a random (drive, N, eta, start) of a parameter set (the asymmetric one
 unless ``preset`` says another). A case is run twice through the sweep kernels: with the documented defaults (only
 ``t_end`` given) and *settled* (3x longer, points and rest judged on the last
-third). :func:`compare` lists the cases whose status or period differ.
+third). :func:`verdict` sets a label against the settled one.
 """
 
 from __future__ import annotations
@@ -75,11 +75,3 @@ def verdict(label: tuple[str, int], settled: tuple[str, int]) -> str:
     if (label == ("ok", 0) and settled[0] == "ok") or label[0] == "unsettled":
         return "none found"
     return "false"
-
-
-def compare(cases, preset: str = "asymmetric") -> tuple[list, list, list]:
-    """(default labels, settled labels, indices of the cases that disagree)."""
-    default = run(cases, preset, t_end=T_END)
-    settled = run(cases, preset, **SETTLED)
-    diff = [k for k in range(len(cases)) if default[k] != settled[k]]
-    return default, settled, diff
