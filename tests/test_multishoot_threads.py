@@ -134,9 +134,18 @@ def test_a_segment_cut_short_is_not_recorded(tmp_path):
 def test_run_concurrently_keeps_order_errors_and_nesting(monkeypatch):
     monkeypatch.setattr(bthreads, "numba_threads", lambda: 3)
     seen = []
+    took_one = {"main": threading.Event(), "worker": threading.Event()}
 
     def call(k):
-        seen.append(threading.current_thread().name)
+        name = threading.current_thread().name
+        seen.append(name)
+        # the calls take no time, so whichever thread starts first could take all eight:
+        # each waits (at most 30 s) until the other kind of thread has taken one too
+        mine, other = (
+            ("worker", "main") if name.startswith("stickslip-worker") else ("main", "worker")
+        )
+        took_one[mine].set()
+        took_one[other].wait(30.0)
         # nested work in a worker runs in that worker, one call after the other
         inner = bthreads.run_concurrently([lambda: k, lambda: -k])
         return k * k, inner
