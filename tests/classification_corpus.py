@@ -14,7 +14,7 @@ import stickslip_fast as ssf
 from stickslip_fast.analysis.census import default_box
 from stickslip_fast.backends.local import compute_restart_chunk
 from stickslip_fast.base.status import STATUS_NAMES
-from stickslip_fast.core.settings import Settings
+from stickslip_fast.core.settings import Settings, default_atol
 
 T_END = 3000.0
 SETTLED = {"t_end": 9000.0, "t_transient": 6000.0}
@@ -48,9 +48,17 @@ def random_cases(
     return cases
 
 
-def run(cases, preset: str = "asymmetric", **settings) -> list[tuple[str, int]]:
-    """(status, period) of every case, the cases of one (drive, N) in one parallel chunk."""
+def run(
+    cases, preset: str = "asymmetric", eps: float | None = None, **settings
+) -> list[tuple[str, int]]:
+    """(status, period) of every case, the cases of one (drive, N) in one parallel chunk;
+    with ``eps``, of the preset with that eps (and the default atol that eps takes, as
+    in ``sweep``)."""
     out: list[tuple[str, int] | None] = [None] * len(cases)
+    if settings.get("atol") is None:
+        settings["atol"] = default_atol(
+            system_of("constant", 1, preset).eps if eps is None else eps
+        )
     s = Settings.resolve(**settings)
     for drive in DRIVES:
         for n_osc in (1, 2):
@@ -60,6 +68,8 @@ def run(cases, preset: str = "asymmetric", **settings) -> list[tuple[str, int]]:
             etas = np.array([[cases[k][2]] for k in idx])
             y0s = np.array([cases[k][3] for k in idx])
             system = system_of(drive, n_osc, preset)
+            if eps is not None:
+                system = system.replace(eps=eps)
             res = compute_restart_chunk(system, ("eta",), etas, y0s, s)
             for j, k in enumerate(idx):
                 out[k] = (STATUS_NAMES[int(res["status"][j])], int(res["period"][j]))

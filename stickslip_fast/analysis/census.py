@@ -32,7 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from ..base.messages import plain
-from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings, warn_if_coarse_atol
+from ..core.settings import (
+    DEFAULT_EQUILIBRIUM_TOL,
+    Settings,
+    default_atol,
+    warn_if_coarse_atol,
+)
 from ..io import CENSUS_RUN_FIELDS, CensusLayout, read_census, write_census_classification
 from ..model.system import (
     SWEEPABLE,
@@ -182,12 +187,14 @@ def census(
         system, n_starts, box, starts, seed, include_zero, names if plane else param,
         axes if plane else axes[0],
     )  # fmt: skip
+    eps = smallest_eps(system, names, axes)
     settings = Settings.resolve(
-        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,
-        max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
-        period_tol=period_tol, stop=stop, dwell=dwell,
+        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol,
+        atol=default_atol(eps) if atol is None else atol, h=h, max_points=max_points,
+        max_steps=max_steps, equilibrium_tol=equilibrium_tol, period_tol=period_tol,
+        stop=stop, dwell=dwell,
     )  # fmt: skip
-    warn_if_coarse_atol(smallest_eps(system, names, axes), settings.atol, stacklevel=2)
+    warn_if_coarse_atol(eps, settings.atol, stacklevel=2)
     config = _census_config(system, names, axes, start_arr, stop, settings, backend)
     if _config_extra:  # callers built on the census (basins) add their own fields
         config.update(_config_extra)

@@ -20,6 +20,7 @@ from ..core.settings import (
     Settings,
     check_memory,
     check_real,
+    default_atol,
     period_tolerance,
     warn_if_coarse_atol,
 )
@@ -71,7 +72,9 @@ METHOD_PARAMS_DOC = """
         each method's steps are in ``result.switching`` (docs/performance.md,
         "Stiffness-aware switching").
     rtol, atol : float, optional
-        Tolerances of the adaptive methods (defaults 1e-9 and 1e-11; rtol at most 1e-2).
+        Tolerances of the adaptive methods (rtol at most 1e-2). Defaults: rtol 1e-9;
+        atol 1e-11, and 1e-6 eps where the friction law's eps (its smallest, with a
+        swept eps) is below 1e-5 (:func:`~stickslip_fast.core.settings.default_atol`).
     h : float, optional
         Fixed step size. Required by ``"dopri5-fixed"``; with ``"rodas5p"`` it
         runs the Rosenbrock method with fixed steps (for convergence studies)."""
@@ -175,6 +178,8 @@ def simulate(
     """
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
+    if atol is None:
+        atol = default_atol(system.eps)
     s = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
         period_tol, stop=stop, dwell=dwell,
@@ -263,6 +268,8 @@ def recorded_crossings(
     crossings (times, states) with the status, under ``simulate``'s default
     settings otherwise (Rodas5P, fixed stopping).
     """
+    if atol is None:
+        atol = default_atol(system.eps)
     s = Settings.resolve(
         "rodas5p", t_end, 0.0, rtol, atol, None, max_points, None, DEFAULT_EQUILIBRIUM_TOL,
         None,

@@ -31,15 +31,16 @@ from ..backends.local import (
 )
 from ..base.messages import plain
 from ..base.terminal import show_progress
-from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings
+from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings, default_atol
 from ..io import MemoryStore, SweepFile
-from ..model.system import System
+from ..model.system import System, smallest_eps
 from .sweep_plan import (  # noqa: F401  (_normalise_params: census checks its axes with it)
     BACKENDS,
     MODES,
     _check_backend,
     _check_chunk_size,
     _check_sweep_memory,
+    _checked_params,
     _normalise_params,
     _Plan,
     _plan,
@@ -266,11 +267,14 @@ def sweep(
     stop: str = "fixed",
     dwell: float | None = None,
 ) -> SweepResult:
+    names, axes = _checked_params(system, param, values)
+    if atol is None:
+        atol = default_atol(smallest_eps(system, names, axes))
     settings = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
         period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
-    plan = _plan(system, param, values, mode, y0, analyses, settings)
+    plan = _plan(system, names, axes, mode, y0, analyses, settings)
     _check_backend(backend, scheduler, n_workers)
     _check_chunk_size(chunk_size)
     plan, runner = _backend_runner(plan, backend, scheduler, n_workers)

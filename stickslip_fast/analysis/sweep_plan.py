@@ -163,10 +163,16 @@ class _Plan:
         return config
 
 
-def _plan(system, param, values, mode, y0, analyses, settings: Settings) -> _Plan:
+def _checked_params(
+    system: System, param, values
+) -> tuple[tuple[str, ...], tuple[np.ndarray, ...]]:
+    """The swept fields' names and checked values (first: the default atol needs them)."""
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
-    names, axes = _normalise_params(system, param, values)
+    return _normalise_params(system, param, values)
+
+
+def _plan(system, names, axes, mode, y0, analyses, settings: Settings) -> _Plan:
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if mode != "restart":
