@@ -188,3 +188,23 @@ def test_a_given_frame_is_used_in_order():
     assert spec.settings["k"] == 2
     assert spec.exponents.shape == (2,)
     assert spec.exponents[0] == pytest.approx(largest.exponent, abs=1e-3)
+
+
+def test_the_default_atol_follows_a_small_eps():
+    # a stable period-2 orbit (Fig. 6, eta = 6.0) has largest exponent 0 (along the
+    # flow); at eps = 1e-8 the old fixed atol 1e-10 (1e-2 eps) gave -0.0081 over these
+    # 1000 time units, atol = 1e-4 ... 1e-6 eps -0.00008 (analysis/lyapunov.py)
+    from stickslip_fast.analysis.lyapunov import default_lyapunov_atol
+
+    assert default_lyapunov_atol(1e-5) == 1e-10 == default_lyapunov_atol(1.0)
+    assert default_lyapunov_atol(1e-8) == 1e-5 * 1e-8
+    sharp = ssf.System.preset("asymmetric", eta=6.0, eps=1e-8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ssf.CoarseToleranceWarning)
+        lam = ssf.largest_lyapunov(sharp, 2000.0, 1000.0)
+        spec = ssf.lyapunov_spectrum(sharp, 2000.0, 1000.0, k=2)
+    assert lam.settings["atol"] == spec.settings["atol"] == default_lyapunov_atol(1e-8)
+    assert abs(lam.exponent) < 1e-3 and abs(spec.exponents[0]) < 1e-3
+    with pytest.warns(ssf.CoarseToleranceWarning, match="eps = 1e-08") as rec:
+        ssf.largest_lyapunov(sharp, 2000.0, 1000.0, atol=1e-10)
+    assert rec[0].filename == __file__

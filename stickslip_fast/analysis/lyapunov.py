@@ -13,13 +13,30 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..base.messages import plain
+from ..core.settings import warn_if_coarse_atol
 from ..model.system import System
 from .lyapunov_kernel import lyapunov_kernel, run_tangents
 
-__all__ = ["LyapunovResult", "largest_lyapunov", "lyapunov_kernel"]
+__all__ = ["LyapunovResult", "largest_lyapunov", "lyapunov_kernel", "default_lyapunov_atol"]
 
 DEFAULT_LYAP_RTOL = 1e-8
 DEFAULT_LYAP_ATOL = 1e-10
+#: The default atol per unit of eps below the presets' eps = 1e-5 (DEFAULT_LYAP_ATOL / 1e-5;
+#: see :func:`default_lyapunov_atol`).
+LYAP_ATOL_PER_EPS = 1e-5
+
+
+def default_lyapunov_atol(eps: float) -> float:
+    """The Lyapunov functions' default atol for the friction law's ``eps``.
+
+    :data:`DEFAULT_LYAP_ATOL` (1e-10, which is 1e-5 eps at the presets' eps = 1e-5), and
+    :data:`LYAP_ATOL_PER_EPS` ``eps`` below that, as
+    :func:`~stickslip_fast.core.settings.default_atol` for ``simulate``. At eps = 1e-8 a
+    fixed 1e-10 (1e-2 eps) gave -0.0081 for Fig. 6's period-2 orbit at eta = 6.0 and
+    -0.032 at eta = 9.99, where atol = 1e-4 eps ... 1e-6 eps gives -0.00008 and +0.0015
+    (the values at eps = 1e-5: +0.00025 and +0.0016).
+    """
+    return min(DEFAULT_LYAP_ATOL, LYAP_ATOL_PER_EPS * eps)
 
 
 _LARGEST_DOC = """Largest Lyapunov exponent from the variational equations (Benettin).
@@ -38,8 +55,11 @@ _LARGEST_DOC = """Largest Lyapunov exponent from the variational equations (Bene
         only the direction of u evolves.
     y0 : array_like, optional
         Initial state (default zeros, as in :func:`stickslip_fast.simulate`).
-    rtol, atol : float
-        Tolerances of the y part (defaults 1e-8 and 1e-10, as ``simulate``).
+    rtol, atol : float, optional
+        Tolerances of the y part. Defaults: rtol 1e-8; atol 1e-10, and 1e-5 eps where
+        the friction law's eps is below 1e-5 (:func:`default_lyapunov_atol`). An atol
+        above 1e-4 eps leaves the creep of a sticking disk unresolved and gives a
+        :class:`~stickslip_fast.CoarseToleranceWarning`.
     renorm_dt : float
         Minimum time between renormalisations (and convergence records).
     u0 : array_like, optional
@@ -126,14 +146,14 @@ def largest_lyapunov(
     t_transient: float = 0.0,
     y0: np.ndarray | list | None = None,
     rtol: float = DEFAULT_LYAP_RTOL,
-    atol: float = DEFAULT_LYAP_ATOL,
+    atol: float | None = None,
     renorm_dt: float = 1.0,
     *,
     u0: np.ndarray | list | None = None,
     tangent_atol: float = 1e-8,
     max_steps: int = 50_000_000,
 ) -> LyapunovResult:
-    y_init, tangent_atol = check_inputs(
+    y_init, atol, tangent_atol = check_inputs(
         system, t_end, t_transient, y0, rtol, atol, renorm_dt, tangent_atol
     )
     n = system.n_state
@@ -169,10 +189,13 @@ def default_frame(n: int, k: int) -> np.ndarray:
 
 
 def check_inputs(system, t_end, t_transient, y0, rtol, atol, renorm_dt, tangent_atol):
-    """Check the arguments the Lyapunov functions share; the initial state and
-    ``tangent_atol`` as the kernel takes them."""
+    """Check the arguments the Lyapunov functions share; the initial state, ``atol`` (the
+    default where None) and ``tangent_atol`` as the kernel takes them. Warns (for the
+    public function that called it) if ``atol`` is coarse against eps."""
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
+    if atol is None:
+        atol = default_lyapunov_atol(system.eps)
     for name, value in (("t_end", t_end), ("rtol", rtol), ("atol", atol), ("renorm_dt", renorm_dt)):
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be finite and > 0, got {plain(value)}")
@@ -181,7 +204,9 @@ def check_inputs(system, t_end, t_transient, y0, rtol, atol, renorm_dt, tangent_
     tangent_atol = float(tangent_atol)
     if not (math.isfinite(tangent_atol) and tangent_atol > 0):
         raise ValueError(f"tangent_atol must be finite and > 0, got {plain(tangent_atol)}")
-    return system.initial_state(y0), tangent_atol
+    y_init = system.initial_state(y0)
+    warn_if_coarse_atol(system.eps, atol, stacklevel=3)
+    return y_init, atol, tangent_atol
 
 
 def fit_slope(conv: np.ndarray, t_start: float) -> float:

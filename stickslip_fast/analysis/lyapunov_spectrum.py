@@ -16,7 +16,6 @@ import numpy as np
 
 from ..model.system import System
 from .lyapunov import (
-    DEFAULT_LYAP_ATOL,
     DEFAULT_LYAP_RTOL,
     check_inputs,
     default_frame,
@@ -46,8 +45,9 @@ _SPECTRUM_DOC = """The k largest Lyapunov exponents from the variational equatio
         only the directions of the vectors evolve.
     y0 : array_like, optional
         Initial state (default zeros, as in :func:`stickslip_fast.simulate`).
-    rtol, atol : float
-        Tolerances of the state (defaults 1e-8 and 1e-10, as ``simulate``).
+    rtol, atol : float, optional
+        Tolerances of the state, as for :func:`~stickslip_fast.largest_lyapunov`
+        (rtol 1e-8; atol 1e-10, or 1e-5 eps where eps is below 1e-5).
     renorm_dt : float
         Minimum time between the records of ``convergence``. With k > 1 the
         vectors are re-orthonormalised after every step whatever it is; with
@@ -182,7 +182,7 @@ def lyapunov_spectrum(
     t_transient: float = 0.0,
     y0: np.ndarray | list | None = None,
     rtol: float = DEFAULT_LYAP_RTOL,
-    atol: float = DEFAULT_LYAP_ATOL,
+    atol: float | None = None,
     renorm_dt: float = 1.0,
     *,
     k: int | None = None,
@@ -190,7 +190,7 @@ def lyapunov_spectrum(
     tangent_atol: float = 1e-8,
     max_steps: int = 50_000_000,
 ) -> LyapunovSpectrum:
-    y_init, tangent_atol = check_inputs(
+    y_init, atol, tangent_atol = check_inputs(
         system, t_end, t_transient, y0, rtol, atol, renorm_dt, tangent_atol
     )
     start = _frame(system.n_state, k, frame)

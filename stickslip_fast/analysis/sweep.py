@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -31,7 +32,12 @@ from ..backends.local import (
 )
 from ..base.messages import plain
 from ..base.terminal import show_progress
-from ..core.settings import DEFAULT_EQUILIBRIUM_TOL, Settings, default_atol
+from ..core.settings import (
+    DEFAULT_EQUILIBRIUM_TOL,
+    CoarseToleranceWarning,
+    Settings,
+    default_atol,
+)
 from ..io import MemoryStore, SweepFile
 from ..model.system import System, smallest_eps
 from .sweep_plan import (  # noqa: F401  (_normalise_params: census checks its axes with it)
@@ -133,10 +139,14 @@ def _run_analyses(unit: WorkUnit, res: dict, plan: _Plan) -> dict:
         starts = unit_starts(unit, res, plan.y0).reshape(-1, plan.y0.size)
         lam = np.full(len(vals), np.nan)
         fit = np.full(len(vals), np.nan)
-        for i, (row, start) in enumerate(zip(vals, starts)):
-            sys_i = system.replace(**{n: float(v) for n, v in zip(names, row)})
-            ly = largest_lyapunov(sys_i, s.t_end, s.t_transient, y0=start, rtol=s.rtol, atol=s.atol)
-            lam[i], fit[i] = ly.exponent, ly.exponent_fit
+        with warnings.catch_warnings():  # the sweep warned of a coarse atol once already
+            warnings.simplefilter("ignore", CoarseToleranceWarning)
+            for i, (row, start) in enumerate(zip(vals, starts)):
+                sys_i = system.replace(**{n: float(v) for n, v in zip(names, row)})
+                ly = largest_lyapunov(
+                    sys_i, s.t_end, s.t_transient, y0=start, rtol=s.rtol, atol=s.atol
+                )
+                lam[i], fit[i] = ly.exponent, ly.exponent_fit
         res["lyapunov"] = lam.reshape(shape)
         res["lyapunov_fit"] = fit.reshape(shape)
     return res
