@@ -14,7 +14,8 @@ import stickslip_fast as ssf
 from stickslip_fast.analysis.census import default_box
 from stickslip_fast.backends.local import compute_restart_chunk
 from stickslip_fast.base.status import STATUS_NAMES
-from stickslip_fast.core.settings import Settings, default_atol
+from stickslip_fast.core.settings import Settings, system_defaults
+from stickslip_fast.model.system import slowest_belt_speed
 
 T_END = 3000.0
 SETTLED = {"t_end": 9000.0, "t_transient": 6000.0}
@@ -49,17 +50,17 @@ def random_cases(
 
 
 def run(
-    cases, preset: str = "asymmetric", eps: float | None = None, **settings
+    cases,
+    preset: str = "asymmetric",
+    eps: float | None = None,
+    vb: float | None = None,
+    **settings,
 ) -> list[tuple[str, int]]:
     """(status, period) of every case, the cases of one (drive, N) in one parallel chunk;
-    with ``eps``, of the preset with that eps (and the default atol that eps takes, as
-    in ``sweep``)."""
+    with ``eps`` or ``vb``, of the preset with that eps or belt speed (``vb`` and
+    ``vb0``). atol, equilibrium_tol and dwell not given take their defaults for the
+    system, as in ``sweep``."""
     out: list[tuple[str, int] | None] = [None] * len(cases)
-    if settings.get("atol") is None:
-        settings["atol"] = default_atol(
-            system_of("constant", 1, preset).eps if eps is None else eps
-        )
-    s = Settings.resolve(**settings)
     for drive in DRIVES:
         for n_osc in (1, 2):
             idx = [k for k, c in enumerate(cases) if c[0] == drive and c[1] == n_osc]
@@ -70,6 +71,13 @@ def run(
             system = system_of(drive, n_osc, preset)
             if eps is not None:
                 system = system.replace(eps=eps)
+            if vb is not None:
+                system = system.replace(vb=vb, vb0=vb)
+            atol, eq_tol, dwell = system_defaults(
+                system.eps, slowest_belt_speed(system), settings.get("atol"),
+                settings.get("equilibrium_tol"), settings.get("dwell"),
+            )  # fmt: skip
+            s = Settings.resolve(**dict(settings, atol=atol, equilibrium_tol=eq_tol, dwell=dwell))
             res = compute_restart_chunk(system, ("eta",), etas, y0s, s)
             for j, k in enumerate(idx):
                 out[k] = (STATUS_NAMES[int(res["status"][j])], int(res["period"][j]))

@@ -32,16 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from ..base.messages import plain
-from ..core.settings import (
-    DEFAULT_EQUILIBRIUM_TOL,
-    Settings,
-    default_atol,
-    warn_if_coarse_atol,
-)
+from ..core.settings import Settings, system_defaults, warn_if_coarse_atol
 from ..io import CENSUS_RUN_FIELDS, CensusLayout, read_census, write_census_classification
 from ..model.system import (
     SWEEPABLE,
     System,
+    slowest_belt_speed,
     smallest_eps,
     warn_if_synchronous,
 )
@@ -167,7 +163,7 @@ def census(
     h: float | None = None,
     max_points: int = DEFAULT_CENSUS_POINTS,
     max_steps: int | None = None,
-    equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
+    equilibrium_tol: float | None = None,
     period_tol: float | None = None,
     dwell: float | None = None,
     identity_tol: float | None = None,
@@ -188,11 +184,13 @@ def census(
         axes if plane else axes[0],
     )  # fmt: skip
     eps = smallest_eps(system, names, axes)
+    atol, equilibrium_tol, dwell = system_defaults(
+        eps, slowest_belt_speed(system, names, axes), atol, equilibrium_tol, dwell
+    )
     settings = Settings.resolve(
-        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol,
-        atol=default_atol(eps) if atol is None else atol, h=h, max_points=max_points,
-        max_steps=max_steps, equilibrium_tol=equilibrium_tol, period_tol=period_tol,
-        stop=stop, dwell=dwell,
+        method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,
+        max_points=max_points, max_steps=max_steps, equilibrium_tol=equilibrium_tol,
+        period_tol=period_tol, stop=stop, dwell=dwell,
     )  # fmt: skip
     warn_if_coarse_atol(eps, settings.atol, stacklevel=2)
     config = _census_config(system, names, axes, start_arr, stop, settings, backend)

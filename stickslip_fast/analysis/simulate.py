@@ -20,8 +20,8 @@ from ..core.settings import (
     Settings,
     check_memory,
     check_real,
-    default_atol,
     period_tolerance,
+    system_defaults,
     warn_if_coarse_atol,
 )
 from ..core.trajectory import (
@@ -40,7 +40,7 @@ from ..core.trajectory import (
     integrate,
     method_variant,
 )
-from ..model.system import System, warn_if_synchronous
+from ..model.system import System, slowest_belt_speed, warn_if_synchronous
 
 __all__ = [
     "simulate",
@@ -93,8 +93,11 @@ CLASSIFY_PARAMS_DOC = """
         ``t_final`` may exceed ``t_end``); one still at rest for less is
         "unsettled" (never an orbit: its crossings would be round-off minima of
         x1 at rest). Motion that died out earlier
-        never counts. Default 1e-4, ten times the presets' eps: inside the
-        friction law's stick band a "stuck" disk creeps at O(eps).
+        never counts. Default 1e-4, ten times the presets' eps (inside the
+        friction law's stick band a "stuck" disk creeps at O(eps)), and 1e-2 of
+        the belt speed (v_b, or v_b0 on a DC motor; the slowest of a sweep) where
+        that is smaller: a sticking disk rides with the belt
+        (:func:`~stickslip_fast.core.settings.default_equilibrium_tol`).
     period_tol : float, optional
         Relative tolerance of the period detector (default 1e4 rtol, at most 1e-4:
         :func:`period_tolerance`).
@@ -115,9 +118,12 @@ CLASSIFY_PARAMS_DOC = """
         Time at rest at the end of the run that makes it an equilibrium (see
         ``equilibrium_tol``); with ``stop="converged"`` also the time at rest
         after which the run ends (default 200, about 15 periods of the slowest
-        free oscillation). An orbit needs a crossing within the last ``dwell``; a
-        run whose disk 1 moves and that crossed before waits up to ``dwell`` past
-        ``t_end`` for its next crossing."""
+        free oscillation, and 200 x 0.0112 / v_b for a belt slower than the
+        presets' v_b = 0.0112, whose stick phases last longer in proportion:
+        :func:`~stickslip_fast.core.settings.default_dwell`). An orbit needs a
+        crossing within the last ``dwell``; a run whose disk 1 moves and that
+        crossed before waits up to ``dwell`` past ``t_end`` for its next
+        crossing."""
 
 
 @fill_doc(method_params=METHOD_PARAMS_DOC, classify_params=CLASSIFY_PARAMS_DOC)
@@ -134,7 +140,7 @@ def simulate(
     sample_dt: float | None = None,
     *,
     max_steps: int | None = None,
-    equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
+    equilibrium_tol: float | None = None,
     period_tol: float | None = None,
     stop: str = "fixed",
     dwell: float | None = None,
@@ -178,8 +184,9 @@ def simulate(
     """
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
-    if atol is None:
-        atol = default_atol(system.eps)
+    atol, equilibrium_tol, dwell = system_defaults(
+        system.eps, slowest_belt_speed(system), atol, equilibrium_tol, dwell
+    )
     s = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
         period_tol, stop=stop, dwell=dwell,
@@ -268,11 +275,12 @@ def recorded_crossings(
     crossings (times, states) with the status, under ``simulate``'s default
     settings otherwise (Rodas5P, fixed stopping).
     """
-    if atol is None:
-        atol = default_atol(system.eps)
+    atol, equilibrium_tol, dwell = system_defaults(
+        system.eps, slowest_belt_speed(system), atol, None, None
+    )
     s = Settings.resolve(
-        "rodas5p", t_end, 0.0, rtol, atol, None, max_points, None, DEFAULT_EQUILIBRIUM_TOL,
-        None,
+        "rodas5p", t_end, 0.0, rtol, atol, None, max_points, None, equilibrium_tol, None,
+        dwell=dwell,
     )  # fmt: skip
     bufs = _RunBuffers.allocate(system, s, None)
     code = _run_kernel(system, s, system.initial_state(y0), None, bufs)

@@ -32,14 +32,9 @@ from ..backends.local import (
 )
 from ..base.messages import plain
 from ..base.terminal import show_progress
-from ..core.settings import (
-    DEFAULT_EQUILIBRIUM_TOL,
-    CoarseToleranceWarning,
-    Settings,
-    default_atol,
-)
+from ..core.settings import CoarseToleranceWarning, Settings, system_defaults
 from ..io import MemoryStore, SweepFile
-from ..model.system import System, smallest_eps
+from ..model.system import System, slowest_belt_speed, smallest_eps
 from .sweep_plan import (  # noqa: F401  (_normalise_params: census checks its axes with it)
     BACKENDS,
     MODES,
@@ -269,7 +264,7 @@ def sweep(
     scheduler: str | None = None,
     n_workers: int | None = None,
     max_steps: int | None = None,
-    equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
+    equilibrium_tol: float | None = None,
     period_tol: float | None = None,
     title: str = "",
     notes: str = "",
@@ -278,8 +273,10 @@ def sweep(
     dwell: float | None = None,
 ) -> SweepResult:
     names, axes = _checked_params(system, param, values)
-    if atol is None:
-        atol = default_atol(smallest_eps(system, names, axes))
+    atol, equilibrium_tol, dwell = system_defaults(
+        smallest_eps(system, names, axes), slowest_belt_speed(system, names, axes), atol,
+        equilibrium_tol, dwell,
+    )  # fmt: skip
     settings = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
         period_tol, stop=stop, dwell=dwell,

@@ -41,6 +41,10 @@ __all__ = [
     "ATOL_EPS_RATIO",
     "DEFAULT_ATOL_PER_EPS",
     "default_atol",
+    "PRESET_BELT_SPEED",
+    "default_equilibrium_tol",
+    "default_dwell",
+    "system_defaults",
     "CoarseToleranceWarning",
     "warn_if_coarse_atol",
     "check_real",
@@ -113,6 +117,53 @@ def default_atol(eps: float) -> float:
     labels false or undetected; benchmarks/eps_atol.py).
     """
     return min(DEFAULT_ATOL, DEFAULT_ATOL_PER_EPS * eps)
+
+
+#: The constant belt speed of the main parameter sets (v_b = v_b0 = 0.0112), at which
+#: :data:`DEFAULT_EQUILIBRIUM_TOL` and :data:`DEFAULT_DWELL` were set.
+PRESET_BELT_SPEED = 0.0112
+
+
+def default_equilibrium_tol(belt_speed: float | None) -> float:
+    """The default ``equilibrium_tol`` for a belt at ``belt_speed``.
+
+    :data:`DEFAULT_EQUILIBRIUM_TOL` (1e-4), and 1e-2 ``|belt_speed|`` where that is
+    smaller. A disk that sticks rides with the belt, so below a belt speed of 1e-2 the
+    fixed 1e-4 took a stick phase for rest: at v_b = 1e-4 Fig. 6's stick-slip orbits
+    read as "equilibrium" (benchmarks/belt_speed.py). ``None`` (no belt speed, or 0):
+    the fixed default.
+    """
+    if not belt_speed:
+        return DEFAULT_EQUILIBRIUM_TOL
+    return min(DEFAULT_EQUILIBRIUM_TOL, 1e-2 * abs(belt_speed))
+
+
+def default_dwell(belt_speed: float | None) -> float:
+    """The default ``dwell`` for a belt at ``belt_speed``.
+
+    :data:`DEFAULT_DWELL` (200) at the presets' belt speed and above, and longer in
+    proportion to 1 / ``|belt_speed|`` below it: a stick phase lasts about the spring's
+    travel over the belt speed (some 6 time units at v_b = 0.0112, some 700 at 1e-4),
+    and an orbit needs a crossing within the last ``dwell``. ``None``: the fixed
+    default.
+    """
+    if not belt_speed:
+        return DEFAULT_DWELL
+    return max(DEFAULT_DWELL, DEFAULT_DWELL * PRESET_BELT_SPEED / abs(belt_speed))
+
+
+def system_defaults(
+    eps: float, belt_speed: float | None, atol: float | None,
+    equilibrium_tol: float | None, dwell: float | None,
+) -> tuple[float, float, float]:  # fmt: skip
+    """``(atol, equilibrium_tol, dwell)``, each given value kept and each ``None`` set to
+    its default for the friction law's (smallest) ``eps`` and the (slowest) belt speed
+    (:func:`default_atol`, :func:`default_equilibrium_tol`, :func:`default_dwell`)."""
+    return (
+        default_atol(eps) if atol is None else atol,
+        default_equilibrium_tol(belt_speed) if equilibrium_tol is None else equilibrium_tol,
+        default_dwell(belt_speed) if dwell is None else dwell,
+    )
 
 
 class CoarseToleranceWarning(UserWarning):
@@ -324,7 +375,7 @@ class Settings:
         h: float | None = None,
         max_points: int = 1000,
         max_steps: int | None = None,
-        equilibrium_tol: float = DEFAULT_EQUILIBRIUM_TOL,
+        equilibrium_tol: float | None = None,
         period_tol: float | None = None,
         **extra: Any,
     ) -> Settings:
@@ -359,7 +410,7 @@ class Settings:
     def _build(
         cls, method: str, t_end: float | None, t_transient: float, rtol: float | None,
         atol: float | None, h: float | None, max_points: int, max_steps: int | None,
-        equilibrium_tol: float, period_tol: float | None, **extra: Any,
+        equilibrium_tol: float | None, period_tol: float | None, **extra: Any,
     ) -> Settings:  # fmt: skip
         """:meth:`resolve` without the kept records."""
         if t_end is None:
@@ -386,7 +437,9 @@ class Settings:
             h=0.0 if h is None else h,
             max_points=max_points,
             max_steps=DEFAULT_MAX_STEPS if max_steps is None else max_steps,
-            equilibrium_tol=equilibrium_tol,
+            equilibrium_tol=(
+                DEFAULT_EQUILIBRIUM_TOL if equilibrium_tol is None else equilibrium_tol
+            ),
             period_tol=period_tolerance(rtol) if period_tol is None else period_tol,
             **{k: v for k, v in extra.items() if v is not None},
         )

@@ -31,6 +31,7 @@ __all__ = [
     "SynchronousStartWarning",
     "warn_if_synchronous",
     "smallest_eps",
+    "slowest_belt_speed",
 ]
 
 DRIVES = ("constant", "dc-motor")
@@ -347,6 +348,18 @@ def smallest_eps(system: System, names=(), axes=()) -> float:
     """The smallest eps of ``system`` and of the swept values of ``names`` / ``axes``."""
     swept = [float(np.min(a)) for n, a in zip(names, axes, strict=True) if n == "eps" and len(a)]
     return min([system.eps, *swept])
+
+
+def slowest_belt_speed(system: System, names=(), axes=()) -> float | None:
+    """The smallest nonzero belt speed |v_b| (|v_b0| on a DC motor) of ``system`` and of
+    the swept values of ``names`` / ``axes``; None if every one is 0."""
+    field = "vb0" if system.is_dc_motor else "vb"
+    speeds = [abs(getattr(system, field))]
+    for name, a in zip(names, axes, strict=True):
+        if name == field:
+            speeds.extend(np.abs(np.asarray(a, dtype=float)).tolist())
+    moving = [v for v in speeds if v > 0]
+    return min(moving) if moving else None
 
 
 def dc_motor_constants(
