@@ -31,12 +31,10 @@ Result: ``results/belt_speed_<date>.json``, with the machine.
 
 from __future__ import annotations
 
-import argparse
 import time
-import warnings
 from pathlib import Path
 
-from .loose_labels import corpus
+from .loose_labels import corpus_start, write_corpus_result
 
 RESULTS = Path(__file__).resolve().parent / "results"
 VB = (0.0112, 1e-3, 3e-4, 1e-4)
@@ -62,20 +60,7 @@ def _count(labels, settled, cc) -> dict:
 def main(argv=None) -> int:
     from stickslip_fast.core.settings import default_dwell
 
-    from .common import machine_info, write_result
-
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--vb", type=float, nargs="*", default=list(VB))
-    ap.add_argument("--cases", type=int, default=60)
-    ap.add_argument(
-        "--out", type=Path, default=RESULTS / f"belt_speed_{time.strftime('%Y-%m-%d')}.json"
-    )
-    args = ap.parse_args(argv)
-    warnings.simplefilter("ignore")  # two disks from a synchronous start
-    cc = corpus()
-    cases = cc.random_cases(args.cases, SEED)
-    started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
-    t0 = time.perf_counter()
+    args, cc, cases, started, t0 = corpus_start(__doc__, "belt_speed", "vb", VB, 60, argv, SEED)
     rows = []
     for vb in args.vb:
         stretch = PRESET_VB / vb
@@ -98,9 +83,7 @@ def main(argv=None) -> int:
                       f"{row['false']} ({row['false equilibrium']} at rest, "
                       f"{row['no crossing in window']} no-crossings), none found "
                       f"{row['none found']} ({row['wall_s']:.1f} s)", flush=True)  # fmt: skip
-    result = dict(machine=machine_info(), started=started, seed=SEED, rows=rows,
-                  wall=time.perf_counter() - t0)  # fmt: skip
-    write_result(args.out, result)
+    write_corpus_result(args.out, started, t0, rows, seed=SEED)
     return 0
 
 

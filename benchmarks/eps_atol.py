@@ -24,12 +24,10 @@ Result: ``results/eps_atol_<date>.json``, with the machine. About 1 min per eps 
 
 from __future__ import annotations
 
-import argparse
 import time
-import warnings
 from pathlib import Path
 
-from .loose_labels import corpus
+from .loose_labels import corpus_start, write_corpus_result
 
 RESULTS = Path(__file__).resolve().parent / "results"
 EPS = (1e-5, 1e-7, 1e-8, 1e-9, 1e-10)
@@ -41,20 +39,7 @@ SEED = 2026
 
 
 def main(argv=None) -> int:
-    from .common import machine_info, write_result
-
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--eps", type=float, nargs="*", default=list(EPS))
-    ap.add_argument("--cases", type=int, default=200)
-    ap.add_argument(
-        "--out", type=Path, default=RESULTS / f"eps_atol_{time.strftime('%Y-%m-%d')}.json"
-    )
-    args = ap.parse_args(argv)
-    warnings.simplefilter("ignore")  # two disks from a synchronous start; coarse atol
-    cc = corpus()
-    cases = cc.random_cases(args.cases, SEED)
-    started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
-    t0 = time.perf_counter()
+    args, cc, cases, started, t0 = corpus_start(__doc__, "eps_atol", "eps", EPS, 200, argv, SEED)
     rows = []
     for eps in args.eps:
         t = time.perf_counter()
@@ -78,9 +63,7 @@ def main(argv=None) -> int:
             print(f"eps {eps:g} atol {atol:g} ({atol / eps:g} eps): same {row['same']}, "
                   f"false {row['false']}, none found {row['none found']}, settled failed "
                   f"{row['settled failed']} ({wall:.1f} s)", flush=True)  # fmt: skip
-    result = dict(machine=machine_info(), started=started, seed=SEED, rows=rows,
-                  wall=time.perf_counter() - t0)  # fmt: skip
-    write_result(args.out, result)
+    write_corpus_result(args.out, started, t0, rows, seed=SEED)
     return 0
 
 

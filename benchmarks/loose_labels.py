@@ -55,6 +55,33 @@ def corpus():
     return classification_corpus
 
 
+def corpus_start(doc: str, stem: str, axis: str, values, cases: int, argv, seed: int) -> tuple:
+    """The start of a benchmark on the corpus: its command line (``--<axis>`` values,
+    ``--cases``, ``--out``: ``results/<stem>_<date>.json``), the corpus module, ``cases``
+    asymmetric cases of ``seed``, the start time (UTC) and the clock. Warnings are
+    silenced from here on (two disks from a synchronous start, a coarse tolerance on
+    purpose)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument(f"--{axis}", type=float, nargs="*", default=list(values))
+    ap.add_argument("--cases", type=int, default=cases)
+    ap.add_argument(
+        "--out", type=Path, default=RESULTS / f"{stem}_{time.strftime('%Y-%m-%d')}.json"
+    )
+    args = ap.parse_args(argv)
+    warnings.simplefilter("ignore")
+    cc = corpus()
+    started = time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
+    return args, cc, cc.random_cases(args.cases, seed), started, time.perf_counter()
+
+
+def write_corpus_result(out: Path, started: str, t0: float, rows: list, **extra) -> None:
+    """Write a corpus benchmark's rows with the machine, its start and its wall time."""
+    from .common import machine_info, write_result
+
+    write_result(out, dict(machine=machine_info(), started=started, rows=rows,
+                           wall=time.perf_counter() - t0, **extra))  # fmt: skip
+
+
 def main(argv=None) -> int:
     from .common import machine_info, write_result
 
