@@ -98,9 +98,10 @@ def period_tolerance(rtol: float) -> float:
 
 #: Largest atol / eps that resolves the creep of a sticking disk. Over the classification
 #: corpus at the default rtol (benchmarks/eps_atol.py) atol = 1e-4 eps gave the settled
-#: labels for all 200 asymmetric cases at eps = 1e-5, 1e-7, 1e-8 and 1e-9; 1e-3 eps left
-#: 23 (eps = 1e-5) and 78 (eps = 1e-8) of them false or undetected. At rtol 1e-6 / 1e-3
-#: (benchmarks/loose_labels.py) 1e-2 eps gave 4-26 false, 1e-1 eps 4-80.
+#: labels for all 200 asymmetric cases at eps = 1e-5, 1e-7, 1e-8 and 1e-9 (3 false at
+#: eps = 1e-3); 1e-3 eps left 23 (eps = 1e-5) to 78 (eps = 1e-8) of them false or
+#: undetected. At rtol 1e-6 / 1e-3 (benchmarks/loose_labels.py) 1e-2 eps gave 4-26
+#: false, 1e-1 eps 4-80.
 ATOL_EPS_RATIO = 1e-4
 #: The default atol per unit of eps, where eps is below the presets' 1e-5
 #: (:func:`default_atol`): the presets' ratio, DEFAULT_ATOL / 1e-5.
