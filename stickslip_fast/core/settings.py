@@ -42,6 +42,7 @@ __all__ = [
     "DEFAULT_ATOL_PER_EPS",
     "default_atol",
     "PRESET_BELT_SPEED",
+    "EQUILIBRIUM_TOL_PER_BELT_SPEED",
     "default_equilibrium_tol",
     "default_dwell",
     "system_defaults",
@@ -123,6 +124,9 @@ def default_atol(eps: float) -> float:
 #: The constant belt speed of the main parameter sets (v_b = v_b0 = 0.0112), at which
 #: :data:`DEFAULT_EQUILIBRIUM_TOL` and :data:`DEFAULT_DWELL` were set.
 PRESET_BELT_SPEED = 0.0112
+#: The default equilibrium_tol per unit of a belt speed below 0.01
+#: (:func:`default_equilibrium_tol`).
+EQUILIBRIUM_TOL_PER_BELT_SPEED = 1e-2
 
 
 def default_equilibrium_tol(belt_speed: float | None) -> float:
@@ -136,7 +140,7 @@ def default_equilibrium_tol(belt_speed: float | None) -> float:
     """
     if not belt_speed:
         return DEFAULT_EQUILIBRIUM_TOL
-    return min(DEFAULT_EQUILIBRIUM_TOL, 1e-2 * abs(belt_speed))
+    return min(DEFAULT_EQUILIBRIUM_TOL, EQUILIBRIUM_TOL_PER_BELT_SPEED * abs(belt_speed))
 
 
 def default_dwell(belt_speed: float | None) -> float:
