@@ -31,6 +31,7 @@ from stickslip_fast.core.settings import (
     default_atol,
     period_tolerance,
 )
+from stickslip_fast.model.system import smallest_eps
 
 ASYM = ssf.System.preset("asymmetric")
 SLIDING_ETAS = (1.0, 3.2, 4.0)
@@ -284,6 +285,8 @@ def test_the_default_atol_follows_a_small_eps():
     assert default_atol(1e-5) == DEFAULT_ATOL == 1e-11  # the presets' 1e-6 eps
     assert default_atol(1.0) == 1e-11
     assert default_atol(1e-8) == 1e-6 * 1e-8
+    # a swept eps replaces the system's own
+    assert smallest_eps(ssf.System.preset("asymmetric", eps=1e-9), ("eps",), ([1e-5],)) == 1e-5
     sys_ = ssf.System.preset("asymmetric")
     kw = dict(t_end=20.0, progress=False)
     with warnings.catch_warnings():

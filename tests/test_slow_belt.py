@@ -85,3 +85,10 @@ def test_a_sweep_and_a_census_over_the_belt_speed_take_its_slowest_value():
     # default is left out of the configuration, so old files keep their hash)
     assert preset.settings["equilibrium_tol"] == 1e-4
     assert "dwell" not in preset.settings.to_dict()
+
+
+def test_a_swept_belt_speed_replaces_the_systems_own():
+    slow = ssf.System.preset("asymmetric", vb=1e-4)
+    assert slowest_belt_speed(slow, ("vb",), ([0.05, 0.1],)) == 0.05
+    assert slowest_belt_speed(slow, ("eta",), ([2.0],)) == 1e-4
+    assert slowest_belt_speed(slow, ("vb",), ([0.0],)) is None

@@ -345,21 +345,21 @@ def warn_if_synchronous(system: System, what: str, stacklevel: int) -> None:
 
 
 def smallest_eps(system: System, names=(), axes=()) -> float:
-    """The smallest eps of ``system`` and of the swept values of ``names`` / ``axes``."""
+    """The smallest eps a run of ``system`` over the swept ``names`` / ``axes`` meets: the
+    swept values where eps is swept, else the system's own."""
     swept = [float(np.min(a)) for n, a in zip(names, axes, strict=True) if n == "eps" and len(a)]
-    return min([system.eps, *swept])
+    return min(swept) if swept else system.eps
 
 
 def slowest_belt_speed(system: System, names=(), axes=()) -> float | None:
-    """The smallest nonzero belt speed |v_b| (|v_b0| on a DC motor) of ``system`` and of
-    the swept values of ``names`` / ``axes``; None if every one is 0."""
+    """The smallest nonzero belt speed |v_b| (|v_b0| on a DC motor) that a run of
+    ``system`` over the swept ``names`` / ``axes`` meets: the swept values where the
+    field is swept, else the system's own; None if every one is 0."""
     field = "vb0" if system.is_dc_motor else "vb"
-    speeds = [abs(getattr(system, field))]
-    for name, a in zip(names, axes, strict=True):
-        if name == field:
-            speeds.extend(np.abs(np.asarray(a, dtype=float)).tolist())
-    moving = [v for v in speeds if v > 0]
-    return min(moving) if moving else None
+    swept = [np.asarray(a, dtype=float) for n, a in zip(names, axes, strict=True) if n == field]
+    speeds = np.abs(np.concatenate(swept)) if swept else np.array([abs(getattr(system, field))])
+    moving = speeds[speeds > 0]
+    return float(moving.min()) if moving.size else None
 
 
 def dc_motor_constants(
