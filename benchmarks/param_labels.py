@@ -68,12 +68,10 @@ def label(system, eta: float, y0: np.ndarray, **given) -> tuple[str, int]:
     from stickslip_fast.backends.local import compute_restart_chunk
     from stickslip_fast.base.status import STATUS_NAMES
     from stickslip_fast.core.settings import Settings, system_defaults
-    from stickslip_fast.model.system import slowest_belt_speed
 
     atol, eq_tol, dwell = system_defaults(
-        system.eps, slowest_belt_speed(system), given.pop("atol", None), None,
-        given.pop("dwell", None),
-    )  # fmt: skip
+        system, atol=given.pop("atol", None), dwell=given.pop("dwell", None)
+    )
     s = Settings.resolve(atol=atol, equilibrium_tol=eq_tol, dwell=dwell, **given)
     res = compute_restart_chunk(system, ("eta",), np.array([[eta]]), y0[None, :], s)
     return STATUS_NAMES[int(res["status"][0])], int(res["period"][0])

@@ -15,7 +15,6 @@ from stickslip_fast.analysis.census import default_box
 from stickslip_fast.backends.local import compute_restart_chunk
 from stickslip_fast.base.status import STATUS_NAMES
 from stickslip_fast.core.settings import Settings, system_defaults
-from stickslip_fast.model.system import slowest_belt_speed
 
 T_END = 3000.0
 SETTLED = {"t_end": 9000.0, "t_transient": 6000.0}
@@ -74,8 +73,8 @@ def run(
             if vb is not None:
                 system = system.replace(vb=vb, vb0=vb)
             atol, eq_tol, dwell = system_defaults(
-                system.eps, slowest_belt_speed(system), settings.get("atol"),
-                settings.get("equilibrium_tol"), settings.get("dwell"),
+                system, atol=settings.get("atol"),
+                equilibrium_tol=settings.get("equilibrium_tol"), dwell=settings.get("dwell"),
             )  # fmt: skip
             s = Settings.resolve(**dict(settings, atol=atol, equilibrium_tol=eq_tol, dwell=dwell))
             res = compute_restart_chunk(system, ("eta",), etas, y0s, s)

@@ -37,7 +37,6 @@ from ..io import CENSUS_RUN_FIELDS, CensusLayout, read_census, write_census_clas
 from ..model.system import (
     SWEEPABLE,
     System,
-    slowest_belt_speed,
     smallest_eps,
     warn_if_synchronous,
 )
@@ -185,7 +184,7 @@ def census(
     )  # fmt: skip
     eps = smallest_eps(system, names, axes)
     atol, equilibrium_tol, dwell = system_defaults(
-        eps, slowest_belt_speed(system, names, axes), atol, equilibrium_tol, dwell
+        system, names, axes, atol=atol, equilibrium_tol=equilibrium_tol, dwell=dwell
     )
     settings = Settings.resolve(
         method=method, t_end=t_end, t_transient=t_transient, rtol=rtol, atol=atol, h=h,

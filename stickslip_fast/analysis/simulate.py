@@ -40,7 +40,7 @@ from ..core.trajectory import (
     integrate,
     method_variant,
 )
-from ..model.system import System, slowest_belt_speed, warn_if_synchronous
+from ..model.system import System, warn_if_synchronous
 
 __all__ = [
     "simulate",
@@ -185,7 +185,7 @@ def simulate(
     if not isinstance(system, System):
         raise TypeError(f"system must be a stickslip_fast.System, got {type(system).__name__}")
     atol, equilibrium_tol, dwell = system_defaults(
-        system.eps, slowest_belt_speed(system), atol, equilibrium_tol, dwell
+        system, atol=atol, equilibrium_tol=equilibrium_tol, dwell=dwell
     )
     s = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
@@ -275,9 +275,7 @@ def recorded_crossings(
     crossings (times, states) with the status, under ``simulate``'s default
     settings otherwise (Rodas5P, fixed stopping).
     """
-    atol, equilibrium_tol, dwell = system_defaults(
-        system.eps, slowest_belt_speed(system), atol, None, None
-    )
+    atol, equilibrium_tol, dwell = system_defaults(system, atol=atol)
     s = Settings.resolve(
         "rodas5p", t_end, 0.0, rtol, atol, None, max_points, None, equilibrium_tol, None,
         dwell=dwell,

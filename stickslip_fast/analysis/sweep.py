@@ -34,7 +34,7 @@ from ..base.messages import plain
 from ..base.terminal import show_progress
 from ..core.settings import CoarseToleranceWarning, Settings, system_defaults
 from ..io import MemoryStore, SweepFile
-from ..model.system import System, slowest_belt_speed, smallest_eps
+from ..model.system import System
 from .sweep_plan import (  # noqa: F401  (_normalise_params: census checks its axes with it)
     BACKENDS,
     MODES,
@@ -274,9 +274,8 @@ def sweep(
 ) -> SweepResult:
     names, axes = _checked_params(system, param, values)
     atol, equilibrium_tol, dwell = system_defaults(
-        smallest_eps(system, names, axes), slowest_belt_speed(system, names, axes), atol,
-        equilibrium_tol, dwell,
-    )  # fmt: skip
+        system, names, axes, atol=atol, equilibrium_tol=equilibrium_tol, dwell=dwell
+    )
     settings = Settings.resolve(
         method, t_end, t_transient, rtol, atol, h, max_points, max_steps, equilibrium_tol,
         period_tol, stop=stop, dwell=dwell,

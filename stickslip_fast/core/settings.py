@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..base.messages import plain
+from ..model.system import System, slowest_belt_speed, smallest_eps
 from .poincare import MAX_PERIOD
 from .trajectory import METHODS, RunSettings, run_settings
 
@@ -158,16 +159,18 @@ def default_dwell(belt_speed: float | None) -> float:
 
 
 def system_defaults(
-    eps: float, belt_speed: float | None, atol: float | None,
-    equilibrium_tol: float | None, dwell: float | None,
+    system: System, names=(), axes=(), *, atol: float | None = None,
+    equilibrium_tol: float | None = None, dwell: float | None = None,
 ) -> tuple[float, float, float]:  # fmt: skip
-    """``(atol, equilibrium_tol, dwell)``, each given value kept and each ``None`` set to
-    its default for the friction law's (smallest) ``eps`` and the (slowest) belt speed
-    (:func:`default_atol`, :func:`default_equilibrium_tol`, :func:`default_dwell`)."""
+    """``(atol, equilibrium_tol, dwell)`` for a run of ``system`` over the swept ``names``
+    / ``axes``: each given value kept, each ``None`` set to its default for the smallest
+    eps and the slowest belt speed the run meets (:func:`default_atol`,
+    :func:`default_equilibrium_tol`, :func:`default_dwell`)."""
+    speed = slowest_belt_speed(system, names, axes)
     return (
-        default_atol(eps) if atol is None else atol,
-        default_equilibrium_tol(belt_speed) if equilibrium_tol is None else equilibrium_tol,
-        default_dwell(belt_speed) if dwell is None else dwell,
+        default_atol(smallest_eps(system, names, axes)) if atol is None else atol,
+        default_equilibrium_tol(speed) if equilibrium_tol is None else equilibrium_tol,
+        default_dwell(speed) if dwell is None else dwell,
     )
 
 
