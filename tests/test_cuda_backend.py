@@ -111,6 +111,19 @@ def test_constant_belt_matches_cpu():
     assert np.any(cpu.n_crossings > 4)
 
 
+def test_a_decaying_oscillation_is_refused_as_on_the_cpu():
+    # minima that repeat within the tolerance while they head for rest: period 0 on both
+    # (poincare.orbit_period; tests/test_decaying_oscillation.py has the references)
+    from test_decaying_oscillation import DECAYING, NEAR_REST
+
+    kw = dict(t_end=300.0, t_transient=0.0, y0=NEAR_REST, max_points=32, progress=False)
+    eta = np.array([DECAYING.eta])
+    gpu = sweep(DECAYING, "eta", eta, backend="cuda", **kw)
+    cpu = sweep(DECAYING, "eta", eta, backend="local", **kw)
+    _agree(gpu, cpu)
+    assert (cpu.status[0], cpu.period[0], cpu.count[0]) == ("ok", 0, 32)
+
+
 def test_dc_motor_two_disks_matches_cpu():
     # N = 2 with the DC motor: the bordered (Schur complement) solve; eta > v_b0 / beta stalls
     two = ssf.System.preset("asymmetric", drive="dc-motor", n_oscillators=2)

@@ -10,7 +10,7 @@ import numpy as np
 from ..base.docs import fill_doc
 from ..base.interrupt import call_interruptible, new_abort_flag
 from ..core.autoswitch import AUTO_STATS
-from ..core.poincare import MAX_PERIOD, STATUS_NAMES, detect_period
+from ..core.poincare import MAX_PERIOD, STATUS_NAMES, orbit_period
 from ..core.results import SimulationResult
 from ..core.settings import (
     DEFAULT_ATOL,
@@ -296,7 +296,12 @@ def _result(
     period = 0
     if status == "ok":
         tp, pts = _ring_points(b, n_cross, s.max_points)
-        period = int(detect_period(pts, len(tp), s.period_tol, MAX_PERIOD))
+        period = int(
+            orbit_period(
+                pts, len(tp), s.period_tol, MAX_PERIOD, system.to_array(),
+                system.n_oscillators, system.is_dc_motor,
+            )
+        )  # fmt: skip
     else:
         tp, pts = np.empty(0), np.empty((0, n))
     t = y = None

@@ -125,7 +125,7 @@ motion_measure = _device_callable(poincare.motion_measure)
 classify = _device_callable(poincare.classify)
 
 
-detect_period = _device_callable(poincare.detect_period)
+orbit_period = _device_callable(poincare.orbit_period)
 
 
 ring_period = _device_callable(poincare.ring_period)

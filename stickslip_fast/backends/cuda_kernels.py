@@ -25,7 +25,7 @@ The kernel calls :func:`stickslip_fast.model.equations.rhs`,
 :func:`~stickslip_fast.model.equations.jacobian_blocks`, the bordered solve
 :func:`stickslip_fast.model.linalg.w_factor` / :func:`~stickslip_fast.model.linalg.w_solve`
 and the helpers of :mod:`stickslip_fast.core.poincare` (:func:`motion_measure`,
-:func:`classify`, :func:`detect_period`, :func:`ring_period`) *as they are*:
+:func:`classify`, :func:`orbit_period`, :func:`ring_period`) *as they are*:
 numba-cuda compiles a CPU ``@njit`` function called from a kernel into a
 device function from the same Python source (``CUDATypingContext.resolve_value_type``
 wraps the dispatcher's ``py_func`` in a device ``CUDADispatcher``, recursively
@@ -65,10 +65,10 @@ from .cuda_device import (  # numba.cuda from there: it imports numba_cuda first
     _write_counts,
     check_available,
     cuda,
-    detect_period,
     float64,
     int64,
     jacobian_blocks,
+    orbit_period,
     rhs,
     ring_period,
     simulator_enabled,
@@ -221,7 +221,7 @@ def _make_kernel(N_OSC: int, DC: bool, max_registers: int | None = None):  # noq
                     if status == _ST_OK:
                         count = min(n_cross, cap)
                         _time_order(pts, tpts, n_cross)
-                        period = detect_period(pts, count, period_tol, max_period)
+                        period = orbit_period(pts, count, period_tol, max_period, p, N_OSC, DC)
                     _nan_rows(pts, tpts, count)
                     _write_counts(ints, v, count, period, status, n_steps, n_rej, n_cross)
                 v = cuda.atomic.add(queue, 0, 1)

@@ -51,11 +51,17 @@ ST_NOT_COMPUTED = -1
 #:    not crossed within the tail);
 #: 2. (2026-11-27) such a window looks past its end, for up to ``dwell``, until the run
 #:    is decided (:func:`stickslip_fast.core.stoprules.past_end`). Only runs that rules 1
-#:    labelled "unsettled" or "no-crossings" can end differently.
-LABEL_RULES = 2
+#:    labelled "unsettled" or "no-crossings" can end differently;
+#: 3. (2026-12-02) an "ok" run whose points repeat while they still drift towards the
+#:    rest state is an oscillation dying out: period 0, "none found"
+#:    (:func:`stickslip_fast.core.poincare.orbit_period`). Only "ok" runs with a period
+#:    can be labelled differently; their status stays "ok".
+LABEL_RULES = 3
 #: The statuses that a finished run may have under older :data:`LABEL_RULES` and not
 #: under the current ones (see :func:`stale_labels`).
-LABELS_CHANGED_SINCE = {1: ("no-crossings", "unsettled")}
+LABELS_CHANGED_SINCE = {1: ("no-crossings", "unsettled"), 2: ()}
+#: The rules after which an "ok" run with a period may have another period now.
+PERIODS_CHANGED_SINCE = frozenset({2})
 
 #: Statuses for which a run has an orbit to report.
 ORBIT_STATUSES = ("ok",)
@@ -73,24 +79,35 @@ def status_names(codes: np.ndarray) -> np.ndarray:
     return names[np.where(codes < 0, len(STATUS_NAMES), codes)]
 
 
-def stale_labels(rules: int, codes: np.ndarray) -> np.ndarray:
-    """Which stored statuses the current :data:`LABEL_RULES` could decide differently.
+def stale_labels(rules: int, codes: np.ndarray, periods: np.ndarray | None = None) -> np.ndarray:
+    """Which stored labels the current :data:`LABEL_RULES` could decide differently.
 
     Parameters
     ----------
     rules : int
-        The ``label_rules`` the statuses were computed under.
+        The ``label_rules`` the labels were computed under.
     codes : ndarray of int
         Status codes of finished runs.
+    periods : ndarray of int, optional
+        Their periods (shape of ``codes``). Without them every "ok" run counts as one
+        with a period.
 
     Returns
     -------
     ndarray of bool
-        True where a run of that status under ``rules`` could end with another status
-        now (all False when ``rules`` is current). A run of any other status ended
-        where, and as, the current rules end it.
+        True where a run of that status (and period) under ``rules`` could end with
+        another status or period now (all False when ``rules`` is current). Any other
+        run ended where, and as, the current rules end it.
     """
     names = set()
+    orbits = False
     for old in range(rules, LABEL_RULES):
         names.update(LABELS_CHANGED_SINCE[old])
-    return np.isin(codes, [STATUS_NAMES.index(n) for n in sorted(names)])
+        orbits = orbits or old in PERIODS_CHANGED_SINCE
+    stale = np.isin(codes, [STATUS_NAMES.index(n) for n in sorted(names)])
+    if orbits:
+        with_period = codes == ST_OK
+        if periods is not None:
+            with_period &= np.asarray(periods) > 0
+        stale |= with_period
+    return stale

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..base.messages import plain
-from ..model.equations import dense_jacobian, friction
+from ..model.equations import dense_jacobian, friction, rest_position
 from ..model.params import eta_prime
 from ..model.system import System
 from .returnmap import _field, _finite_state
@@ -53,14 +53,9 @@ class Equilibrium:
 # ------------------------------------------------------------- equilibria
 def _sliding_guess(system: System, vb: float) -> np.ndarray:
     """dx = dphi = 0 at belt speed vb: the springs balance the sliding friction."""
-    n = system.n_state
-    y = np.zeros(n)
-    ts, ms = friction(-vb, 0.0, system.eps, eta_prime(system.eta))
-    a = np.array([[1.0, system.k12], [system.k12, 1.0]])
-    rhs_ = -system.mu * np.array([ts, ms])
-    try:
-        x, ph = np.linalg.solve(a, rhs_)
-    except np.linalg.LinAlgError:
+    y = np.zeros(system.n_state)
+    x, ph = rest_position(vb, system.to_array())
+    if not (math.isfinite(x) and math.isfinite(ph)):  # |k12| = 1: no unique rest position
         x, ph = 0.0, 0.0
     for i in range(system.n_oscillators):
         y[4 * i] = x

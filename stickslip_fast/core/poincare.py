@@ -12,6 +12,8 @@ before the end.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..base.jit import JIT as _JIT
@@ -28,6 +30,8 @@ from ..base.status import (  # noqa: F401  (re-exported: the codes used to live 
     ST_UNSETTLED,
     STATUS_NAMES,
 )
+from ..model.equations import rest_position
+from ..model.params import P_VB
 
 #: A DC-motor equilibrium counts as "stalled" when the belt runs slower than
 #: this fraction of its no-load speed v_b0.
@@ -82,9 +86,105 @@ def _repeats(pts: np.ndarray, first: int, last: int, per: int, thr: float) -> bo
     return True
 
 
+@njit(inline="always", **_JIT)
+def _last_changes(pts: np.ndarray, count: int, per: int) -> tuple[float, float]:
+    """(d0, d1): the largest change of a point over one period, in the period before the
+    last p points and in the last p (max norm; a ring buffer, point j in row j % rows)."""
+    cap = pts.shape[0]
+    d0 = 0.0
+    d1 = 0.0
+    for j in range(count - 2 * per, count):
+        a = pts[j % cap]
+        b = pts[(j - per) % cap]
+        for i in range(pts.shape[1]):
+            if j < count - per:
+                d0 = max(d0, abs(a[i] - b[i]))
+            else:
+                d1 = max(d1, abs(a[i] - b[i]))
+    return d0, d1
+
+
 #: Changes below this fraction of the period tolerance are the integration's noise: the
 #: ratio of two successive ones says nothing about convergence (see :func:`ring_period`).
 NOISE_FRACTION = 1e-2
+
+
+#: A period is refused (:func:`orbit_period`) where the points, extrapolated to their limit,
+#: come within this fraction of their present distance from rest: a decaying oscillation
+#: heads for rest (fraction 0), a transient that converges onto an orbit for a point of
+#: that orbit (fraction near 1).
+REST_LIMIT_FRACTION = 0.5
+
+
+@njit(**_JIT)
+def orbit_period(
+    points: np.ndarray, count: int, tol: float, max_period: int, p: np.ndarray, n_osc: int,
+    dc: bool,
+) -> int:  # fmt: skip
+    """The period of a run's points (:func:`detect_period`), 0 for an oscillation dying out.
+
+    A slowly decaying oscillation about a stable equilibrium has x1 minima that change
+    by less than ``tol`` per period long before it comes to rest: the fixed window then
+    sees them repeat. Such a period is refused (0, "none found") when the points still
+    drift beyond ``tol`` and are heading for the rest state (:func:`decays_to_rest`).
+    ``p`` is the run's parameter array, ``n_osc`` its number of disks, ``dc`` its drive.
+    """
+    per = detect_period(points, count, tol, max_period)
+    if per > 0 and decays_to_rest(points, count, per, tol, p, n_osc, dc):
+        return 0
+    return per
+
+
+@njit(**_JIT)
+def decays_to_rest(
+    points: np.ndarray, count: int, per: int, tol: float, p: np.ndarray, n_osc: int, dc: bool
+) -> bool:
+    """Whether points that repeat with period ``per`` are an oscillation dying out.
+
+    The change over each of the last two periods, d0 then d1 (max norm), extrapolated
+    geometrically as in :func:`ring_period` (rho = d1 / d0), leaves
+    d1 rho / (1 - rho) to come. Where that exceeds ``tol`` (scaled as in
+    :func:`detect_period`), each of the last ``per`` points is carried to its limit,
+    and the points decay to rest when those limits lie within
+    :data:`REST_LIMIT_FRACTION` of the points' present distance from the rest state
+    (every disk at :func:`~stickslip_fast.model.equations.rest_position`, speeds 0, on a
+    belt at the point's own speed). Points that do not contract (d1 >= d0), or whose
+    changes are noise, are left to :func:`detect_period`'s verdict.
+    """
+    if count < 3 * per:
+        return False
+    cap = points.shape[0]
+    thr = tol * (1.0 + _max_abs(points, count - 3 * per, count))
+    d0, d1 = _last_changes(points, count, per)
+    if d1 <= NOISE_FRACTION * thr or not d1 < d0:
+        return False
+    rho = d1 / d0
+    ahead = rho / (1.0 - rho)
+    if d1 * ahead <= thr:
+        return False  # at its limit within the tolerance: the period stands
+    to_rest_now = 0.0
+    to_rest_limit = 0.0
+    for j in range(count - per, count):
+        a = points[j % cap]
+        b = points[(j - per) % cap]
+        vb_now = a[4 * n_osc] if dc else p[P_VB]
+        vb_lim = a[4 * n_osc] + ahead * (a[4 * n_osc] - b[4 * n_osc]) if dc else p[P_VB]
+        x_now, ph_now = rest_position(vb_now, p)
+        x_lim, ph_lim = rest_position(vb_lim, p)
+        if not (math.isfinite(x_now) and math.isfinite(x_lim)):
+            return False  # |k12| = 1: no rest position to head for; the period stands
+        for i in range(4 * n_osc):
+            lim = a[i] + ahead * (a[i] - b[i])
+            slot = i % 4
+            if slot == 0:
+                rest_now, rest_lim = x_now, x_lim
+            elif slot == 2:
+                rest_now, rest_lim = ph_now, ph_lim
+            else:
+                rest_now, rest_lim = 0.0, 0.0
+            to_rest_now = max(to_rest_now, abs(a[i] - rest_now))
+            to_rest_limit = max(to_rest_limit, abs(lim - rest_lim))
+    return to_rest_limit <= REST_LIMIT_FRACTION * to_rest_now
 
 
 @njit(**_JIT)
@@ -217,18 +317,10 @@ def ring_period(
             # d1 rho / (1 - rho) to come (the stopping rule of linearly convergent
             # iterations): a slowly decaying oscillation about an equilibrium has minima
             # that change by less than thr per period long before they stop. Changes
-            # below NOISE_FRACTION thr are noise, whose ratio says nothing. (Inline, not
-            # a compiled helper: each compiled level costs every first run its compile.)
-            d0 = 0.0
-            d1 = 0.0
-            for j in range(count - 2 * per, count):
-                a = pts[j % cap]
-                b = pts[(j - per) % cap]
-                for i in range(pts.shape[1]):
-                    if j < count - per:
-                        d0 = max(d0, abs(a[i] - b[i]))
-                    else:
-                        d1 = max(d1, abs(a[i] - b[i]))
+            # below NOISE_FRACTION thr are noise, whose ratio says nothing. (Inlined in
+            # Numba's IR, not a compiled helper: each compiled level costs every first run
+            # its compile.)
+            d0, d1 = _last_changes(pts, count, per)
             if d1 <= NOISE_FRACTION * thr:
                 return per
             if not d1 < d0:

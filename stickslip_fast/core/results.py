@@ -34,7 +34,8 @@ class SimulationResult:
     n_crossings : int
         All crossings after t_transient (may exceed ``max_points``).
     period : int
-        Smallest p <= 64 with which the points repeat; 0 if none.
+        Smallest p <= 64 with which the points repeat; 0 if none, or if the points
+        still drift towards rest (an oscillation dying out; docs/model.md "Period").
     status : str
         "ok", "equilibrium", "stalled", "unsettled", "no-crossings",
         "nonfinite", "step-underflow" or "max-steps" (see

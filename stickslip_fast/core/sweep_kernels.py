@@ -14,7 +14,7 @@ import numpy as np
 from ..base.jit import ENTRY, njit
 from ..base.status import ST_NOT_COMPUTED, ST_OK, ST_UNSETTLED
 from ..model.params import N_PARAMS
-from .poincare import detect_period
+from .poincare import orbit_period
 from .problems import (
     alloc_bordered_linear,
 )
@@ -69,7 +69,9 @@ def _lane_values(
         period = 0
         if st == ST_OK:
             count_pts = unroll_ring(obs.pts, obs.tpts, obs.counts[0], points[v], t_points[v])
-            period = detect_period(points[v], count_pts, rs.period_tol, rs.max_period)
+            period = orbit_period(
+                points[v], count_pts, rs.period_tol, rs.max_period, params[v], n_osc, dc
+            )
         for i in range(n):
             final_state[v, i] = y[i]
         t_conv[v] = fstat[1]

@@ -109,7 +109,10 @@ _DESCRIPTIONS = {
     "in time order, NaN-padded; the most recent max_points after t_transient",
     "t_points": "Times of the Poincare points",
     "count": "Number of stored Poincare points",
-    "period": "Smallest p <= 64 with which the stored points repeat (0: none detected)",
+    "period": (
+        "Smallest p <= 64 with which the stored points repeat (0: none detected, or an "
+        "oscillation dying out)"
+    ),
     "status": "Outcome of the trajectory (see flag_meanings)",
     "n_steps": "Accepted integration steps",
     "n_rejected": "Rejected integration steps",

@@ -11,7 +11,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..base.status import LABEL_RULES, stale_labels, status_names
+from ..base.status import LABEL_RULES
 from ..core.poincare import STATUS_NAMES
 from .base import (
     ConfigMismatchError,
@@ -28,6 +28,7 @@ from .base import (
     ensure_room,
     open_h5,
 )
+from .label_rules import check_label_rules
 from .layout import (
     _DESCRIPTIONS,
     SCHEMA_VERSION,
@@ -37,48 +38,6 @@ from .layout import (
     write_root_attrs,
 )
 from .verify import _data_fields, scan_sweep, stored_config  # noqa: F401 (re-exported)
-
-
-def _check_label_rules(path: Path, src: h5py.File) -> None:
-    """Refuse to resume a file whose finished values the current rules could label differently.
-
-    A file written under older :data:`~stickslip_fast.base.status.LABEL_RULES` (root
-    attribute ``label_rules``; none: rules 1) resumes only if none of its finished
-    values has a status that the rules changed since then could decide otherwise:
-    every other value is what the current version computes, and one file never holds
-    labels decided by two sets of rules. A file of newer rules is refused.
-    """
-    rules = int(src.attrs.get("label_rules", 1))
-    if rules > LABEL_RULES:
-        raise ConfigMismatchError(
-            f"{path} was begun by a newer version of stickslip_fast (label_rules {rules}; "
-            f"this version applies {LABEL_RULES}): its values may be labelled by rules this "
-            "version does not know. Finish it with that version, or write to another output "
-            "path."
-        )
-    if rules == LABEL_RULES:
-        return
-    try:
-        done = np.asarray(src["done"][...]) != 0
-        codes = np.asarray(src["status"][...])
-    except (OSError, RuntimeError, KeyError, ValueError) as exc:
-        raise ConfigMismatchError(
-            f"{path} was begun under older labelling rules (label_rules {rules}; this version "
-            f"applies {LABEL_RULES}), and its statuses cannot be read to check which of its "
-            f"values they would change ({_short(exc)}). Write to another output path, or "
-            "delete the file to start over."
-        ) from None
-    stale = done & stale_labels(rules, codes)
-    if stale.any():
-        names = " or ".join(repr(n) for n in sorted(set(status_names(codes[stale]))))
-        raise ConfigMismatchError(
-            f"{path} was begun under older labelling rules (label_rules {rules}; this version "
-            f"applies {LABEL_RULES}): {int(stale.sum())} of its {int(done.sum())} finished "
-            f"values are labelled {names}, which the current rules could decide differently "
-            "(docs/file-format.md, 'label_rules'). Resuming would mix two sets of rules in "
-            "one file. Finish it with the version that began it, or write to another output "
-            "path (or delete the file) to compute every value under the current rules."
-        )
 
 
 def _for_appending(path: Path) -> h5py.File:
@@ -201,7 +160,7 @@ class SweepFile:
                 )
             if schema != SCHEMA_VERSION:
                 raise ConfigMismatchError(f"{path} has an unsupported schema version {schema!r}")
-            _check_label_rules(path, src)
+            check_label_rules(path, src)
             problems, bad = scan_sweep(src, layout, meta[2])
         truncated = _truncation(path)
         if truncated:

@@ -46,6 +46,7 @@ __all__ = [
     "friction_factor",
     "friction_partials",
     "friction_second_partials",
+    "rest_position",
     "rhs",
     "jacobian_blocks",
     "jacobian_vector",
@@ -140,6 +141,23 @@ def friction_second_partials(v: float, w: float, eps: float, etap: float):
     m_vw = two3 * (v * h + v * w * wq)
     m_ww = two3 * (3.0 * w * h + w * w * wq)
     return t_vv, t_vw, t_ww, m_vv, m_vw, m_ww
+
+
+@njit(**_JIT)
+def rest_position(vb: float, p: np.ndarray) -> tuple[float, float]:
+    """(x, phi) of a disk at rest on a belt running at ``vb``: its springs balance the friction.
+
+    With x' = phi' = 0 the slip velocity is -v_b and the spin 0, so M_s = 0 and the
+    equations above reduce to x + k12 phi = mu v_b g(-v_b, 0) and k12 x + phi = 0. Every
+    disk of a system has this rest position (they share their parameters). NaN for
+    |k12| = 1, where the springs hold no unique position.
+    """
+    k12 = p[P_K12]
+    det = 1.0 - k12 * k12
+    if det == 0.0:
+        return math.nan, math.nan
+    x = p[P_MU] * vb * friction_factor(-vb, 0.0, p[P_EPS], p[P_ETAP]) / det
+    return x, -k12 * x
 
 
 @njit(inline="always", **_JIT)
