@@ -20,6 +20,7 @@ from stickslip_fast.bifurcation.detection import (
     rank_gap,
     singular_gaps,
 )
+from stickslip_fast.bifurcation.switching import BRANCH_POINT_DS
 
 KW = dict(ds=0.05, ds_min=1e-6, ds_max=0.1, max_points=200, tol=1e-12, branch_points=True)
 
@@ -226,13 +227,17 @@ def test_no_folds_are_read_where_a_disk_is_nearly_undamped(monkeypatch):
     # walked on to max_points along the family, eta wiggling within 1.5e-4)
     assert branch.status == "degenerate" and branch.bifurcations == []
     assert STALL_WINDOW <= len(branch.values) < 30
-    assert 1.024 < branch.values[-5:].min() and branch.values[-5:].max() < 1.0243
-    # the same walk reading its tangent everywhere reports folds there (13 measured
-    # with 200 points), none of them the system's
+    # (the noise decides where along that stretch: 1.024101-1.024222 on a Xeon,
+    # 1.024065-1.024753 on an AMD EPYC VM)
+    assert 1.024 < branch.values[-5:].min() and branch.values[-5:].max() < 1.025
+    # the same walk reading its tangent everywhere reports bifurcations there, none of
+    # them the system's: which kind the noise gives depends on the CPU's roundings
+    # (13 folds with 200 points on a Xeon; 3 branch points at 1.024065-1.024133 on an
+    # AMD EPYC VM, where it ended "step-too-small" after 27 points)
     monkeypatch.setattr("stickslip_fast.bifurcation.orbit_record.RANK_GAP_MIN", 0.0)
     noisy = ssf.continue_orbit(start, "eta", (1.0, 1.2), **kw)
-    folds = [b.value for b in noisy.bifurcations if b.kind == "fold"]
-    assert len(folds) >= 3 and max(folds) - min(folds) < 1e-4
+    spurious = [b.value for b in noisy.bifurcations if b.kind in ("fold", "branch-point")]
+    assert len(spurious) >= 3 and max(spurious) - min(spurious) < 1e-4
 
 
 def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
@@ -252,7 +257,9 @@ def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
     assert orbit.residual < 1e-9
     # the normal form of a pitchfork: the side branch lies on the side where the anti-phase
     # orbit is stable (above the point) and is unstable there (subcritical), 1 + O(eta - bp)
-    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), stick_events=False)
+    # (a first step of at most BRANCH_POINT_DS: with the default 0.01 the walk went back
+    # onto the stable anti-phase branch on an AMD EPYC VM, multiplier 0.66 at 1.5756)
+    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), stick_events=False, ds=BRANCH_POINT_DS)
     assert side.status == "bounds" and side.values[-1] == 1.8
     assert np.all(side.values > bp.value) and not np.any(side.stable)
     lead = np.abs(side.multipliers[:, 0])

@@ -35,6 +35,13 @@ from .synchrony import (
 #: doubled orbit's amplitude grows like sqrt(|lambda - lambda_PD|), and in the stiff
 #: friction layer the quadratic regime can be very narrow.
 SWITCH_DELTAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
+#: The largest first step (``ds``) for a walk from an orbit switched onto the crossing
+#: branch at a branch point. That orbit lies about its offset (1e-4 on the anti-phase
+#: branch) from the branch it left, where the tangent is barely determined: from the
+#: anti-phase branch's upper point a first step of 0.01 (the default) landed back on the
+#: anti-phase branch on an AMD EPYC VM, though not on a Xeon; 1e-3, 3e-4 and 1e-4 followed
+#: the crossing branch on both (tests/test_branch_points.py).
+BRANCH_POINT_DS = 1e-3
 
 #: At a symmetry-breaking point an offset whose predictor already has max abs(G) below
 #: FLAT * tol is too small to tell the branch apart (measured: 1e-7 and 2e-7 gave 0.1-0.5
@@ -140,7 +147,10 @@ _SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking o
         near the bifurcation's (``orbit.system`` holds it), polished by
         :func:`find_orbit`. Continue it away from the
         bifurcation with ``continue_orbit(orbit, branch.param, bounds,
-        direction=np.sign(getattr(orbit.system, branch.param) - bifurcation.value))``.
+        direction=np.sign(getattr(orbit.system, branch.param) - bifurcation.value))``;
+        from a branch point with a first step ``ds`` of at most
+        :data:`BRANCH_POINT_DS` (1e-3): a larger one can land back on the branch it
+        left.
         If no offset works, the orbit is returned with ``converged = False``
         and a ``message`` saying so.
 

@@ -108,6 +108,8 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
     branch, from each symmetry-breaking point, the branch with the disks apart, and from
     each branch point, the crossing branch, each continued away from it, into OUTPUT's
     stem + ``.pd<k>.h5`` / ``.sb<k>.h5`` / ``.bp<k>.h5``."""
+    from ..bifurcation.switching import BRANCH_POINT_DS
+
     out = Path(args.output)
     found = False
     for kind, tag in (("period-doubling", "pd"), ("symmetry-breaking", "sb"),
@@ -124,7 +126,10 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
                 continue
             value = getattr(orbit.system, branch.param)
             away = 1.0 if value >= bif.value else -1.0
-            new = continue_orbit(orbit, branch.param, bounds, direction=away, **settings)
+            walk = dict(settings)
+            if kind == "branch-point":  # near the branch it left: a small first step
+                walk["ds"] = min(walk.get("ds", BRANCH_POINT_DS), BRANCH_POINT_DS)
+            new = continue_orbit(orbit, branch.param, bounds, direction=away, **walk)
             path = out.with_name(f"{out.stem}.{tag}{k}{out.suffix or '.h5'}")
             new.to_hdf5(path)
             if not args.quiet:
