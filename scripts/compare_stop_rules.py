@@ -9,7 +9,10 @@ last ``period`` points of both runs coincide up to a cyclic shift within
 
 Usage::
 
-    python3 scripts/compare_stop_rules.py --out docs/converged.md --csv docs/converged.csv
+    python3 scripts/compare_stop_rules.py --out OUT.md --csv OUT.csv
+
+with OUT under ``benchmarks/results/stop_rules_<date>/``: docs/converged.md cites the
+run of 2026-11-27 (``now.md``, ``now.csv``) and explains its disagreements by hand.
 """
 
 from __future__ import annotations
