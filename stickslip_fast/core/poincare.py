@@ -135,7 +135,7 @@ def orbit_period(
     return per
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)  # inlined into orbit_period: one compile, not two
 def decays_to_rest(
     points: np.ndarray, count: int, per: int, tol: float, p: np.ndarray, n_osc: int, dc: bool
 ) -> bool:

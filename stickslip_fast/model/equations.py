@@ -143,7 +143,7 @@ def friction_second_partials(v: float, w: float, eps: float, etap: float):
     return t_vv, t_vw, t_ww, m_vv, m_vw, m_ww
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)  # inlined into its callers: no compile of its own
 def rest_position(vb: float, p: np.ndarray) -> tuple[float, float]:
     """(x, phi) of a disk at rest on a belt running at ``vb``: its springs balance the friction.
 
