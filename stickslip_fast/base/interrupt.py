@@ -203,6 +203,12 @@ def _call_in_worker(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) 
     return box["value"]
 
 
+#: How long after a lost Ctrl-C :func:`lost_interrupts_raised` signals the main thread
+#: again: long enough for the hook that arms it to have returned (where the signal is
+#: raised, not inside the hook, where Python would report it and go on), short to a user.
+_AGAIN_AFTER = 0.02
+
+
 @contextlib.contextmanager
 def lost_interrupts_raised() -> Iterator[None]:
     """Within: a Ctrl-C that Python reports as ignored is raised again.
@@ -213,7 +219,7 @@ def lost_interrupts_raised() -> Iterator[None]:
     (:func:`call_interruptible`), but between calls nothing was armed and the command
     went on as if no key had been pressed. Here Python's hook for such exceptions
     (:data:`sys.unraisablehook`) still reports it, and then has another thread signal
-    the main thread again a millisecond later (:func:`_thread.interrupt_main`, which
+    the main thread again 20 ms later (:func:`_thread.interrupt_main`, which
     also writes the wakeup fd, so a kernel in flight stops on its flag). Signalled
     from the hook itself, the interrupt would be raised inside the report and lost
     again; one that lands in a finaliser once more is caught here once more. On the
@@ -224,13 +230,29 @@ def lost_interrupts_raised() -> Iterator[None]:
     previous = sys.unraisablehook
     due: list[threading.Timer] = []
 
-    def hook(unraisable: Any) -> None:
-        previous(unraisable)
-        if isinstance(unraisable.exc_value, KeyboardInterrupt):
-            timer = threading.Timer(0.001, _thread.interrupt_main)
+    def again() -> None:
+        while True:
+            timer = threading.Timer(_AGAIN_AFTER, _thread.interrupt_main)
             timer.daemon = True
+            try:
+                timer.start()  # waits until the thread runs
+            except KeyboardInterrupt:
+                # it fired before start() returned, inside this hook, where it would be
+                # lost again (seen on a loaded 2-core VM, 3 of 8 runs): once more
+                if timer.ident is not None:  # started: joined on the way out
+                    due.append(timer)
+                continue
             due.append(timer)
-            timer.start()
+            return
+
+    def hook(unraisable: Any) -> None:
+        lost = isinstance(unraisable.exc_value, KeyboardInterrupt)
+        try:
+            previous(unraisable)
+        except KeyboardInterrupt:
+            lost = True  # a Ctrl-C, or the one signalled again, landed in the report
+        if lost:
+            again()
 
     sys.unraisablehook = hook
     try:
