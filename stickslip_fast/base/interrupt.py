@@ -204,9 +204,10 @@ def _call_in_worker(kernel: Callable[..., Any], args: tuple, abort: np.ndarray) 
 
 
 #: How long after a lost Ctrl-C :func:`lost_interrupts_raised` signals the main thread
-#: again: long enough for the hook that arms it to have returned (where the signal is
-#: raised, not inside the hook, where Python would report it and go on), short to a user.
-_AGAIN_AFTER = 0.02
+#: again: time for the hook that arms it to return (a signal that lands inside the hook
+#: is caught there and sent once more), and short enough that a command stops at once
+#: (20 ms let the CLI print its result first).
+_AGAIN_AFTER = 0.001
 
 
 @contextlib.contextmanager
@@ -219,7 +220,7 @@ def lost_interrupts_raised() -> Iterator[None]:
     (:func:`call_interruptible`), but between calls nothing was armed and the command
     went on as if no key had been pressed. Here Python's hook for such exceptions
     (:data:`sys.unraisablehook`) still reports it, and then has another thread signal
-    the main thread again 20 ms later (:func:`_thread.interrupt_main`, which
+    the main thread again a millisecond later (:func:`_thread.interrupt_main`, which
     also writes the wakeup fd, so a kernel in flight stops on its flag). Signalled
     from the hook itself, the interrupt would be raised inside the report and lost
     again; one that lands in a finaliser once more is caught here once more. On the
