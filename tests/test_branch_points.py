@@ -257,9 +257,13 @@ def test_switching_at_a_branch_point_finds_the_crossing_branch(anti_branch):
     assert orbit.residual < 1e-9
     # the normal form of a pitchfork: the side branch lies on the side where the anti-phase
     # orbit is stable (above the point) and is unstable there (subcritical), 1 + O(eta - bp)
-    # (a first step of at most BRANCH_POINT_DS: with the default 0.01 the walk went back
-    # onto the stable anti-phase branch on an AMD EPYC VM, multiplier 0.66 at 1.5756)
-    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), stick_events=False, ds=BRANCH_POINT_DS)
+    # With the defaults: the switched orbit's origin gives the first step BRANCH_POINT_DS
+    # and the direction (up). A first step of 0.01 went back onto the stable anti-phase
+    # branch on an AMD EPYC VM (multiplier 0.66 at 1.5756): the crossing branch's tangent
+    # turns from 0.15 to 0.998 in eta within 1e-3 of arclength.
+    assert orbit.origin is bp and orbit.origin_param == "eta"
+    side = ssf.continue_orbit(orbit, "eta", (1.35, 1.8), stick_events=False)
+    assert side.points.shape[0] > 2 and abs(side.values[1] - side.values[0]) < BRANCH_POINT_DS
     assert side.status == "bounds" and side.values[-1] == 1.8
     assert np.all(side.values > bp.value) and not np.any(side.stable)
     lead = np.abs(side.multipliers[:, 0])

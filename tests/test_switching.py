@@ -61,3 +61,28 @@ def test_switch_rejects_bad_shooting(p2_branch):
         ssf.switch_branch(br, pd, shooting="double")
     with pytest.raises(ValueError, match="segments"):
         ssf.switch_branch(br, pd, shooting="multiple", segments=0)
+
+
+def test_continue_orbit_defaults_walk_away_from_the_switched_orbit_s_origin():
+    # continue_orbit's ds and direction, when not given, from Orbit.origin (switch_branch
+    # sets it): away from the bifurcation in its parameter, from a branch point with the
+    # small first step; explicit arguments win, and another parameter ignores the origin
+    from stickslip_fast.bifurcation.orbit_branch import (
+        BRANCH_POINT_DS,
+        DEFAULT_DS,
+        _walk_defaults,
+    )  # fmt: skip
+
+    s = ssf.System.preset("asymmetric", eta=2.0)
+    nan = np.full((1, 4), np.nan)
+    orbit = ssf.Orbit(s, 1, nan, np.ones(1), 1.0, np.ones(3), False, np.eye(3), 0.0, 0, True,
+                      "converged")  # fmt: skip
+    assert _walk_defaults(orbit, "eta", None, None) == (DEFAULT_DS, 1.0)
+    for kind, value, expected in (("branch-point", 2.5, (BRANCH_POINT_DS, -1.0)),
+                                  ("branch-point", 1.5, (BRANCH_POINT_DS, 1.0)),
+                                  ("period-doubling", 2.1, (DEFAULT_DS, -1.0)),
+                                  ("symmetry-breaking", 1.9, (DEFAULT_DS, 1.0))):  # fmt: skip
+        orbit.origin, orbit.origin_param = ssf.Bifurcation(kind, value, 0, nan[0]), "eta"
+        assert _walk_defaults(orbit, "eta", None, None) == expected
+        assert _walk_defaults(orbit, "eta", 0.02, 1.0) == (0.02, 1.0)
+        assert _walk_defaults(orbit, "mu", None, None) == (DEFAULT_DS, 1.0)

@@ -49,6 +49,21 @@ SHARP_END_STAGES: tuple[tuple[float, float, float, float], ...] = (
 MS_TOL_FLOOR = 1e-12
 
 
+#: The first step (``ds``) of :func:`continue_orbit` from an orbit that
+#: :func:`~stickslip_fast.switch_branch` found at a branch point (``Orbit.origin``), and the
+#: largest one advised there. That orbit lies about its offset (1e-4 on the anti-phase
+#: branch) from the branch point, where the crossing branch turns sharply: on the
+#: anti-phase branch's upper point its tangent turns by 80 degrees within 1e-3 of
+#: arclength (its component in eta from 0.15 to 0.998). A first step of 0.01 (the default
+#: elsewhere) landed back on the anti-phase branch on an AMD EPYC VM (multiplier 0.66 at
+#: eta = 1.5756), though not on a Xeon; 1e-3, 3e-4 and 1e-4 followed the crossing branch on
+#: both (tests/test_branch_points.py).
+BRANCH_POINT_DS = 1e-3
+
+#: ``continue_orbit``'s first step elsewhere.
+DEFAULT_DS = 0.01
+
+
 # ------------------------------------------------------------------ orbits
 def _orbit_evaluator(
     system0,
@@ -128,11 +143,17 @@ bounds : (float, float)
     The parameter interval; it must contain the orbit's value.
 ds, ds_min, ds_max : float
     First, smallest and largest step in arclength (section coordinates and
-    the parameter together).
+    the parameter together). ``ds`` defaults to :data:`DEFAULT_DS` (0.01), and to
+    :data:`BRANCH_POINT_DS` (1e-3) for an orbit that
+    :func:`~stickslip_fast.switch_branch` found at a branch point in ``param``
+    (``orbit.origin``): the crossing branch turns sharply next to the point, and a
+    larger first step can land back on the branch it left.
 max_points : int
     Most branch points.
-direction : float
-    +1: start towards increasing ``param``; -1: decreasing.
+direction : float, optional
+    +1: start towards increasing ``param``; -1: decreasing. Default: away from the
+    bifurcation for an orbit :func:`~stickslip_fast.switch_branch` found in ``param``
+    (``orbit.origin``), else +1.
 tol : float
     Corrector tolerance on ``max |P^p(z) - z|``.
 rtol, atol : float
@@ -218,11 +239,11 @@ def continue_orbit(
     param: str,
     bounds: tuple[float, float],
     *,
-    ds: float = 0.01,
+    ds: float | None = None,
     ds_min: float = 1e-8,
     ds_max: float = 0.05,
     max_points: int = 200,
-    direction: float = 1.0,
+    direction: float | None = None,
     tol: float = 1e-10,
     rtol: float = 1e-11,
     atol: float = 1e-13,
@@ -238,6 +259,7 @@ def continue_orbit(
 ) -> Branch:
     if not isinstance(orbit, Orbit) or not orbit.converged:
         raise ValueError("orbit must be a converged Orbit from find_orbit")
+    ds, direction = _walk_defaults(orbit, param, ds, direction)
     lam0, lo, hi = _check_args(orbit.system, "orbit", param, bounds, ds, ds_min, ds_max, tol,
                                max_points)  # fmt: skip
     check_shooting(shooting, segments, max_segments)
@@ -261,6 +283,20 @@ def continue_orbit(
 
 
 continue_orbit.__doc__ = _CONTINUE_ORBIT_DOC
+
+
+def _walk_defaults(orbit: Orbit, param: str, ds, direction) -> tuple[Any, Any]:
+    """(ds, direction) with the defaults filled in: :data:`DEFAULT_DS` and +1, or for an
+    orbit :func:`~stickslip_fast.switch_branch` found (``orbit.origin``) in ``param``,
+    away from the bifurcation, from a branch point with :data:`BRANCH_POINT_DS`."""
+    origin = orbit.origin if orbit.origin_param == param else None
+    if ds is None:
+        ds = BRANCH_POINT_DS if origin is not None and origin.kind == "branch-point" else DEFAULT_DS
+    if direction is None:
+        direction = 1.0
+        if origin is not None and getattr(orbit.system, param) < origin.value:
+            direction = -1.0
+    return ds, direction
 
 
 def _continue_multiple_from(

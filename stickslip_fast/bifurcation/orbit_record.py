@@ -92,6 +92,13 @@ class Orbit:
         (m, n_state); ``starts[0]`` is ``points[0]``). ``continue_orbit`` starts
         from them: past a multiplier of ~1e8 one trajectory from ``points[0]`` does
         not stay near the orbit for a whole period. None for single shooting.
+    origin : Bifurcation or None
+        The bifurcation :func:`~stickslip_fast.switch_branch` found this orbit from, on
+        a branch in the parameter ``origin_param`` (None and "" otherwise).
+        :func:`~stickslip_fast.continue_orbit` in that parameter reads it for its
+        defaults: it walks away from ``origin.value`` and, from a branch point, takes a
+        first step of ``BRANCH_POINT_DS``.
+    origin_param : str
     """
 
     system: System
@@ -109,6 +116,8 @@ class Orbit:
     message: str = ""
     history: list[float] = field(default_factory=list, repr=False)
     segments: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    origin: Any = field(default=None, repr=False)  # a Bifurcation (branch.py imports this module)
+    origin_param: str = field(default="", repr=False)
 
     @property
     def state_names(self) -> list[str]:

@@ -13,7 +13,7 @@ from .branch import Bifurcation, Branch
 from .corrector import Evaluator, _correct
 from .detection import BRANCH_POINT
 from .multishoot import DEFAULT_SEGMENTS
-from .orbit_branch import _orbit_evaluator
+from .orbit_branch import BRANCH_POINT_DS, _orbit_evaluator  # noqa: F401 (its old home)
 from .orbits import (
     SECTION_INDEX,
     SHOOTING_MODES,
@@ -35,13 +35,6 @@ from .synchrony import (
 #: doubled orbit's amplitude grows like sqrt(|lambda - lambda_PD|), and in the stiff
 #: friction layer the quadratic regime can be very narrow.
 SWITCH_DELTAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7)
-#: The largest first step (``ds``) for a walk from an orbit switched onto the crossing
-#: branch at a branch point. That orbit lies about its offset (1e-4 on the anti-phase
-#: branch) from the branch it left, where the tangent is barely determined: from the
-#: anti-phase branch's upper point a first step of 0.01 (the default) landed back on the
-#: anti-phase branch on an AMD EPYC VM, though not on a Xeon; 1e-3, 3e-4 and 1e-4 followed
-#: the crossing branch on both (tests/test_branch_points.py).
-BRANCH_POINT_DS = 1e-3
 
 #: At a symmetry-breaking point an offset whose predictor already has max abs(G) below
 #: FLAT * tol is too small to tell the branch apart (measured: 1e-7 and 2e-7 gave 0.1-0.5
@@ -145,12 +138,13 @@ _SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking o
     Orbit
         Of period 2p (period p at a symmetry-breaking point), at a parameter value
         near the bifurcation's (``orbit.system`` holds it), polished by
-        :func:`find_orbit`. Continue it away from the
-        bifurcation with ``continue_orbit(orbit, branch.param, bounds,
-        direction=np.sign(getattr(orbit.system, branch.param) - bifurcation.value))``;
-        from a branch point with a first step ``ds`` of at most
-        :data:`BRANCH_POINT_DS` (1e-3): a larger one can land back on the branch it
-        left.
+        :func:`find_orbit`, with ``orbit.origin`` = the bifurcation and
+        ``orbit.origin_param`` = ``branch.param``.
+        ``continue_orbit(orbit, branch.param, bounds)`` then walks away from the
+        bifurcation, and from a branch point with the first step
+        :data:`~stickslip_fast.bifurcation.orbit_branch.BRANCH_POINT_DS` (1e-3): a larger
+        one can land back on the branch it left. A ``ds`` or ``direction`` given to
+        :func:`continue_orbit` overrides these.
         If no offset works, the orbit is returned with ``converged = False``
         and a ``message`` saying so.
 
@@ -178,10 +172,21 @@ def switch_branch(
 ) -> Orbit:
     bifurcation = _check_switch(branch, bifurcation, deltas, shooting, segments)
     polish = dict(tol=tol, rtol=rtol, atol=atol, shooting=shooting, segments=int(segments))
-    if bifurcation.kind == SYMMETRY_BREAKING:
-        return _switch_apart(branch, bifurcation, deltas, fd_step, polish)
-    if bifurcation.kind == BRANCH_POINT:
-        return _switch_crossing(branch, bifurcation, deltas, fd_step, polish)
+    switch = {SYMMETRY_BREAKING: _switch_apart, BRANCH_POINT: _switch_crossing}.get(
+        bifurcation.kind, _switch_doubling
+    )
+    orbit = switch(branch, bifurcation, deltas, fd_step, polish)
+    orbit.origin, orbit.origin_param = bifurcation, branch.param  # continue_orbit's defaults
+    return orbit
+
+
+switch_branch.__doc__ = _SWITCH_BRANCH_DOC
+
+
+def _switch_doubling(branch: Branch, bifurcation: Bifurcation, deltas, fd_step: float,
+                     polish) -> Orbit:  # fmt: skip
+    """switch_branch at a period-doubling point: an orbit of twice the period."""
+    rtol, atol, tol = polish["rtol"], polish["atol"], polish["tol"]
     p = branch.period
     mask = np.arange(branch.system.n_state) != SECTION_INDEX
     lam_pd = float(bifurcation.value)
@@ -205,9 +210,6 @@ def switch_branch(
     return _not_found(last, s_pd, z_pd, 2 * p, tol, rtol, atol,
                       f"no period-{2 * p} orbit found along the -1 eigenvector (offsets "
                       f"tried: {offsets})")  # fmt: skip
-
-
-switch_branch.__doc__ = _SWITCH_BRANCH_DOC
 
 
 def _minus_one_vector(s_pd, z_pd, p, rtol, atol) -> np.ndarray:

@@ -124,12 +124,10 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
             if not orbit.converged:
                 print(f"{kind} {k} at {bif.value:.10g}: {orbit.message}", file=sys.stderr)
                 continue
-            value = getattr(orbit.system, branch.param)
-            away = 1.0 if value >= bif.value else -1.0
-            walk = dict(settings)
-            if kind == "branch-point":  # near the branch it left: a small first step
-                walk["ds"] = min(walk.get("ds", BRANCH_POINT_DS), BRANCH_POINT_DS)
-            new = continue_orbit(orbit, branch.param, bounds, direction=away, **walk)
+            walk = dict(settings)  # continue_orbit walks away from the orbit's origin
+            if kind == "branch-point" and "ds" in walk:  # and from a branch point: at most
+                walk["ds"] = min(walk["ds"], BRANCH_POINT_DS)  # its small first step
+            new = continue_orbit(orbit, branch.param, bounds, **walk)
             path = out.with_name(f"{out.stem}.{tag}{k}{out.suffix or '.h5'}")
             new.to_hdf5(path)
             if not args.quiet:
