@@ -144,13 +144,14 @@ def unstable_orbit():
     The first mesh follows the trajectory from the start, which leaves the orbit by
     1e-9 x 1e8 over the period, and the corrector takes about 30 damped steps to pull
     the segments in; how many depends on the CPU's roundings (30 on a Xeon, 31 on an
-    AMD EPYC, which then ended "max-iter" at 1.02e-11 > tol under the default 30).
+    AMD EPYC, which then ended "max-iter" at 1.02e-11 > tol under the old default of 30).
+    The default for multiple shooting is now orbits.MS_MAX_ITER = 60: with the defaults
+    the orbit is found.
     """
     s = ssf.System.preset("asymmetric", eta=ETA_UNSTABLE)
     return ssf.find_orbit(
-        s, START_UNSTABLE, 1, shooting="multiple", tol=1e-11, rtol=1e-13, atol=1e-15,
-        max_iter=60,
-    )  # fmt: skip
+        s, START_UNSTABLE, 1, shooting="multiple", tol=1e-11, rtol=1e-13, atol=1e-15
+    )
 
 
 def test_multiple_shooting_converges_where_single_shooting_stops():
@@ -164,9 +165,7 @@ def test_multiple_shooting_converges_where_single_shooting_stops():
     np.testing.assert_allclose(multi.points[0], Z_UNSTABLE, rtol=0, atol=1e-10)
     assert abs(multi.T - T_UNSTABLE) < 1e-8
     assert 0.9e8 < abs(multi.multipliers[0]) < 1.4e8 and multi.multipliers[0].real > 1
-    auto = ssf.find_orbit(
-        s, start, 1, shooting="auto", tol=1e-11, rtol=1e-13, atol=1e-15, max_iter=60
-    )
+    auto = ssf.find_orbit(s, start, 1, shooting="auto", tol=1e-11, rtol=1e-13, atol=1e-15)
     assert auto.converged and abs(auto.T - multi.T) < 1e-9
 
     # continued from there on its own segments (one trajectory from points[0] leaves the
