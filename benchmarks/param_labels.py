@@ -2,7 +2,7 @@
 
 The classification corpus (``tests/classification_corpus.py``) draws random drives,
 disk counts, eta and starts of the three parameter sets. This script also draws the
-system: one disk, a preset's other fields, and
+system: one disk (or `--disks` identical ones on one belt), a preset's other fields, and
 
 - m log-uniform in [0.5, 100], k12 uniform in (-0.9, 0.9), mu log-uniform in
   [0.01, 5], c uniform in [0, 0.05];
@@ -18,7 +18,7 @@ stall are seen). Besides ``same``, ``false`` and ``none found`` of
 where the settled run has an orbit; the ``false`` ones are also counted by (label,
 settled) status.
 
-    python3 -m benchmarks.param_labels [--seed 11 23] [--cases 500]
+    python3 -m benchmarks.param_labels [--seed 11 23] [--cases 500] [--disks 2]
 
 Result: ``results/param_labels_<date>.json``, with the machine. About 30 s per 500
 cases on one 2-core VM.
@@ -42,8 +42,8 @@ PRESETS = ("asymmetric", "symmetric", "literature")
 AT_REST = ("equilibrium", "stalled")
 
 
-def draw_case(rng: np.random.Generator) -> tuple:
-    """One random (system, eta, start)."""
+def draw_case(rng: np.random.Generator, disks: int = 1) -> tuple:
+    """One random (system, eta, start) of ``disks`` identical disks."""
     import stickslip_fast as ssf
     from stickslip_fast.analysis.census import default_box
 
@@ -56,7 +56,8 @@ def draw_case(rng: np.random.Generator) -> tuple:
         vb=float(np.exp(rng.uniform(np.log(1e-3), np.log(0.2)))),
     )
     fields["vb0"] = fields["vb"]
-    system = base.replace(drive=("constant", "dc-motor")[rng.integers(2)], **fields)
+    system = base.replace(drive=("constant", "dc-motor")[rng.integers(2)], n_oscillators=disks,
+                          **fields)  # fmt: skip
     eta = float(rng.uniform(1, 10))
     box = default_box(system.replace(eta=eta))
     return system, eta, box[:, 0] + rng.random(system.n_state) * (box[:, 1] - box[:, 0])
@@ -88,6 +89,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, nargs="*", default=list(SEEDS))
     ap.add_argument("--cases", type=int, default=500)
+    ap.add_argument("--disks", type=int, default=1, help="disks per system (default 1)")
     ap.add_argument(
         "--out", type=Path, default=RESULTS / f"param_labels_{time.strftime('%Y-%m-%d')}.json"
     )
@@ -101,7 +103,7 @@ def main(argv=None) -> int:
         rng = np.random.default_rng(seed)
         verdicts, pairs, wrong_cases = Counter(), Counter(), []
         for i in range(args.cases):
-            system, eta, y0 = draw_case(rng)
+            system, eta, y0 = draw_case(rng, args.disks)
             lab = label(system, eta, y0, t_end=3000.0, t_transient=2000.0)
             settled = label(system, eta, y0, t_end=30000.0, t_transient=20000.0, atol=1e-13,
                             dwell=5000.0)  # fmt: skip
@@ -113,7 +115,7 @@ def main(argv=None) -> int:
             if wrong(lab, settled):
                 wrong_cases.append(dict(case=i, system=repr(system), eta=eta, label=lab,
                                         settled=settled))  # fmt: skip
-        row = dict(seed=seed, cases=args.cases, **verdicts, wrong=len(wrong_cases),
+        row = dict(seed=seed, cases=args.cases, disks=args.disks, **verdicts, wrong=len(wrong_cases),
                    false_by_status=dict(pairs.most_common()), wrong_cases=wrong_cases)  # fmt: skip
         rows.append(row)
         print(f"seed {seed}: {dict(verdicts)}, wrong {len(wrong_cases)}; false by status: "

@@ -67,7 +67,7 @@ def test_continue_orbit_defaults_walk_away_from_the_switched_orbit_s_origin():
     # continue_orbit's ds and direction, when not given, from Orbit.origin (switch_branch
     # sets it): away from the bifurcation in its parameter, from a branch point with the
     # small first step; explicit arguments win, and another parameter ignores the origin
-    from stickslip_fast.bifurcation.orbit_branch import (
+    from stickslip_fast.bifurcation.walk_args import (
         BRANCH_POINT_DS,
         DEFAULT_DS,
         _walk_defaults,

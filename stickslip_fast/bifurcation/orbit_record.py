@@ -97,7 +97,7 @@ class Orbit:
         a branch in the parameter ``origin_param`` (None and "" otherwise).
         :func:`~stickslip_fast.continue_orbit` in that parameter reads it for its
         defaults: it walks away from ``origin.value`` and, from a branch point, takes a
-        first step of ``BRANCH_POINT_DS``.
+        first step of ``walk_args.BRANCH_POINT_DS``.
     origin_param : str
     """
 

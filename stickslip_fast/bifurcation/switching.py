@@ -13,7 +13,7 @@ from .branch import Bifurcation, Branch
 from .corrector import Evaluator, _correct
 from .detection import BRANCH_POINT
 from .multishoot import DEFAULT_SEGMENTS
-from .orbit_branch import BRANCH_POINT_DS, _orbit_evaluator  # noqa: F401 (its old home)
+from .orbit_branch import _orbit_evaluator
 from .orbits import (
     SECTION_INDEX,
     SHOOTING_MODES,
@@ -29,6 +29,7 @@ from .synchrony import (
     synchronous_point,
     transverse_monodromy,
 )
+from .walk_args import BRANCH_POINT_DS  # noqa: F401 (its old home)
 
 # ------------------------------------------------------------ branch switching
 #: Offsets along the -1 eigenvector tried by :func:`switch_branch`, largest first: the
@@ -142,7 +143,7 @@ _SWITCH_BRANCH_DOC = """The orbit born at a period-doubling, symmetry-breaking o
         ``orbit.origin_param`` = ``branch.param``.
         ``continue_orbit(orbit, branch.param, bounds)`` then walks away from the
         bifurcation, and from a branch point with the first step
-        :data:`~stickslip_fast.bifurcation.orbit_branch.BRANCH_POINT_DS` (1e-3): a larger
+        :data:`~stickslip_fast.bifurcation.walk_args.BRANCH_POINT_DS` (1e-3): a larger
         one can land back on the branch it left. A ``ds`` or ``direction`` given to
         :func:`continue_orbit` overrides these.
         If no offset works, the orbit is returned with ``converged = False``
