@@ -99,6 +99,7 @@ class Orbit:
         defaults: it walks away from ``origin.value`` and, from a branch point, takes a
         first step of ``walk_args.BRANCH_POINT_DS``.
     origin_param : str
+        The parameter of the branch ``origin`` lies on.
     """
 
     system: System
