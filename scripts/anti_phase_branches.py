@@ -29,7 +29,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import stickslip_fast as ssf  # noqa: E402
-from stickslip_fast.bifurcation.switching import BRANCH_POINT_DS  # noqa: E402
 
 PAPER_START = [0.0, 0.0, 0.0, 0.0, 0.05, 0.05, 0.0, 0.0, 0.0]  # Fig. 14: disk 2 displaced
 BOUNDS = (1.0, 5.0)
@@ -77,11 +76,9 @@ def main() -> None:
         if not start.converged:
             print(f"BP at {bp.value:.7f}: {start.message}")
             continue
-        away = 1.0 if start.system.eta >= bp.value else -1.0
-        # a small first step: near the branch it left the tangent is barely determined
-        # (switching.BRANCH_POINT_DS; the stored files, made on a Xeon, took 0.01)
-        crossings.append(ssf.continue_orbit(start, "eta", BOUNDS, direction=away,
-                                            ds=BRANCH_POINT_DS, max_points=120,
+        # the defaults walk away from the branch point with a small first step
+        # (start.origin, walk_args.BRANCH_POINT_DS; the stored files, made on a Xeon, took 0.01)
+        crossings.append(ssf.continue_orbit(start, "eta", BOUNDS, max_points=120,
                                             progress=False))  # fmt: skip
     with warnings.catch_warnings():  # from rest on purpose: the disks stay alike
         warnings.simplefilter("ignore", ssf.SynchronousStartWarning)

@@ -20,7 +20,7 @@ from stickslip_fast.bifurcation.detection import (
     rank_gap,
     singular_gaps,
 )
-from stickslip_fast.bifurcation.switching import BRANCH_POINT_DS
+from stickslip_fast.bifurcation.walk_args import BRANCH_POINT_DS
 
 KW = dict(ds=0.05, ds_min=1e-6, ds_max=0.1, max_points=200, tol=1e-12, branch_points=True)
 

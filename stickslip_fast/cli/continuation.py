@@ -108,7 +108,7 @@ def _switch_and_follow(branch, bounds, settings, args, say, switch_branch, conti
     branch, from each symmetry-breaking point, the branch with the disks apart, and from
     each branch point, the crossing branch, each continued away from it, into OUTPUT's
     stem + ``.pd<k>.h5`` / ``.sb<k>.h5`` / ``.bp<k>.h5``."""
-    from ..bifurcation.switching import BRANCH_POINT_DS
+    from ..bifurcation.walk_args import BRANCH_POINT_DS
 
     out = Path(args.output)
     found = False
