@@ -92,7 +92,8 @@ def test_sigint_stops_a_kernel_in_the_calling_thread(default_sigint, kernel):
         interrupt.call_interruptible(kernel, _LIMIT, abort=flag)
     timer.join()
     assert flag[0] == 1  # the watcher set it: the loop ended on the flag, not the limit
-    assert time.perf_counter() - start < (5.0 if kernel is _spin_until_aborted else 1.5)
+    # well under the ~10 s of the uninterrupted loop, with room for a loaded CI runner
+    assert time.perf_counter() - start < 5.0
     assert signal.set_wakeup_fd(-1) == -1
     # the next call runs normally
     assert (

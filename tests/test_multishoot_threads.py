@@ -97,7 +97,8 @@ def test_ctrl_c_stops_every_segment(orbit, monkeypatch):
     _threads(monkeypatch, 2)
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        # four segments of 5000 time units each: ~1 s apiece on one core here
+        # four segments of 50000 time units each: 60 s in all on two threads here, so a stop
+        # that works is told from one that does not even on a loaded CI runner
         ms = MultiShooting(orbit.system, 4, 1e-10, 1e-12, 1e-10)
         Y = np.repeat(orbit.points[:1], 4, axis=0)
         ms.segment_flows(Y, 40.0)  # compiled and warm (and a check the path runs)
@@ -105,12 +106,12 @@ def test_ctrl_c_stops_every_segment(orbit, monkeypatch):
         start = time.perf_counter()
         timer.start()
         with pytest.raises(KeyboardInterrupt):
-            ms.segment_flows(Y, 20000.0)
+            ms.segment_flows(Y, 200000.0)
         elapsed = time.perf_counter() - start
         timer.join()
     finally:
         signal.signal(signal.SIGINT, old)
-    assert elapsed < 1.5  # measured 0.32 s; uninterrupted the four take 2.7 s on 2 threads
+    assert elapsed < 5.0, elapsed  # measured 0.32 s
     assert signal.set_wakeup_fd(-1) == -1  # the watcher let go of the wakeup fd
 
 
