@@ -102,6 +102,33 @@ def test_sigint_stops_a_kernel_in_the_calling_thread(default_sigint, kernel):
     )
 
 
+def test_ctrl_c_between_two_kernels_of_the_caller_stops_the_workers_kernels(monkeypatch):
+    # plane_crossings runs one state's many kernel calls per thread. Ctrl-C that lands in
+    # the caller's Python code between two of them raises KeyboardInterrupt there, where no
+    # kernel's watcher sets the shared flag: a worker then ran its whole state on (28 s in
+    # a CI run, 2026-12-02). run_concurrently now sets the flag itself.
+    from stickslip_fast.base import threads as bthreads
+
+    monkeypatch.setattr(bthreads, "numba_threads", lambda: 2)
+    _spin_until_aborted(10, interrupt.new_abort_flag())  # compiled
+    flag = interrupt.new_abort_flag()
+    spinning = threading.Event()
+    counts = []
+
+    def call():
+        if threading.current_thread() is threading.main_thread():
+            assert spinning.wait(10)
+            raise KeyboardInterrupt  # as Python's handler raises it between two kernels
+        spinning.set()
+        counts.append(_spin_until_aborted(_LIMIT, flag))
+
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        bthreads.run_concurrently([call, call], abort=flag)
+    assert flag[0] == 1 and len(counts) == 1 and counts[0] < _LIMIT  # ended on the flag
+    assert time.perf_counter() - start < 5.0
+
+
 def test_a_nested_call_hands_the_watcher_back_to_the_outer_one(default_sigint):
     _spin_until_aborted(10, interrupt.new_abort_flag())
     inner_flag = interrupt.new_abort_flag()

@@ -21,6 +21,7 @@ from concurrent.futures import Future, ThreadPoolExecutor, wait
 from typing import Any
 
 import numba
+import numpy as np
 
 __all__ = [
     "shared_pool",
@@ -78,13 +79,19 @@ def finish(futures: Sequence[Future]) -> None:
     wait(futures)
 
 
-def run_concurrently(calls: Sequence[Callable[[], Any]]) -> list[Any]:
+def run_concurrently(
+    calls: Sequence[Callable[[], Any]], abort: np.ndarray | None = None
+) -> list[Any]:
     """``[call() for call in calls]``, the calls shared out between the calling thread and
     :func:`thread_count` - 1 workers (each takes the next call not yet taken).
 
     The calling thread runs its share itself, so a compiled kernel it runs stays
-    interruptible by Ctrl-C; a call running in a worker then finishes first (no call not
-    yet taken is started). The first error of any call is raised after all have stopped.
+    interruptible by Ctrl-C. No call not yet taken is started after an error or Ctrl-C
+    in the caller; a call running in a worker finishes first, unless the calls share an
+    ``abort`` flag (:func:`~stickslip_fast.base.interrupt.new_abort_flag`): that is then
+    set, so their kernels stop within a step, also where Ctrl-C landed in the caller's
+    Python code between two kernels (where no kernel's watcher sets it) or while it
+    waits for the workers. The first error of any call is raised after all have stopped.
     """
     threads = thread_count(len(calls))
     if threads == 1:
@@ -103,17 +110,19 @@ def run_concurrently(calls: Sequence[Callable[[], Any]]) -> list[Any]:
             try:
                 results[i] = calls[i]()
             except BaseException:
-                stop.set()
+                stop.set()  # not the flag: a worker's error leaves the others' calls be
                 raise
 
     futures = [submit(shared_pool(threads - 1), share) for _ in range(threads - 1)]
     try:
         share()
+        finish(futures)  # a worker still busy elsewhere never started its share: cancelled
     except BaseException:  # Ctrl-C or an error in the caller's share: the workers stop
         stop.set()
+        if abort is not None:
+            abort[0] = 1
         finish(futures)
         raise
-    finish(futures)  # a worker still busy elsewhere never started its share: cancelled
     for f in futures:
         if not f.cancelled():
             f.result()  # a worker's error

@@ -67,7 +67,8 @@ def plane_crossings(
     out = np.full((len(st), int(n), int(mask.sum())), np.nan)
     U = np.ascontiguousarray(np.eye(system.n_state)[:, :1])
     # one flag for every state: Ctrl-C during a call in the calling thread (which arms
-    # it) stops the states running in workers too, within a step
+    # it), or in its Python code between two calls (run_concurrently sets it), stops the
+    # states running in workers too, within a step
     abort = new_abort_flag()
 
     def crossings_from(i: int) -> None:  # row i of out, and nothing else
@@ -87,7 +88,7 @@ def plane_crossings(
             out[i, k] = y1[mask]
             y = np.ascontiguousarray(y1)
 
-    run_concurrently([functools.partial(crossings_from, i) for i in range(len(st))])
+    run_concurrently([functools.partial(crossings_from, i) for i in range(len(st))], abort=abort)
     return out
 
 
