@@ -14,7 +14,12 @@ import pytest
 
 import stickslip_fast as ssf
 from stickslip_fast.cli.config import load_config
-from stickslip_fast.core.poincare import decays_to_rest, detect_period, orbit_period
+from stickslip_fast.core.poincare import (
+    decays_to_rest,
+    detect_period,
+    envelope_decays,
+    orbit_period,
+)
 from stickslip_fast.model.equations import rest_position, rhs
 
 # The one wrong label of benchmarks/param_labels.py (seed 11, case 452): a one-disk
@@ -106,18 +111,55 @@ TWO_MODES_START = np.array([0.09676200390104982, 0.030625554961573084, 0.1166519
                             -0.01539034116311215])  # fmt: skip
 
 
-@pytest.mark.xfail(strict=True, reason="docs/limits.md: a decay of two modes at once")
 def test_a_decay_of_two_modes_at_once_is_not_called_an_orbit():
-    # The known limit of label rules 3, met in 1 of 3000 random systems: the slow phi1 mode
+    # Met in 1 of 3000 random systems (label rules 3 read period 1): the slow phi1 mode
     # beats against x1, so the changes of the x1 minima are not geometric over two periods
-    # and orbit_period's extrapolation does not see them head for rest. The label is
-    # period 1; the run is at rest by t = 4000 and stays there.
+    # and decays_to_rest does not see them head for rest. The run is at rest by t = 4000
+    # and stays there; the envelope of the window's last points (envelope_decays, rules 4)
+    # heads for rest
     eq = ssf.find_equilibrium(TWO_MODES)
     assert eq.stable and max(eq.eigenvalues.real) > -2e-3
     later = ssf.simulate(TWO_MODES, 4000.0, t_transient=3000.0, y0=TWO_MODES_START)
     assert later.status == "equilibrium"
-    res = ssf.simulate(TWO_MODES, 3000.0, y0=TWO_MODES_START)  # the default window
-    assert res.status != "ok" or res.period == 0, (res.status, res.period)
+    for t_end in (2500.0, 3000.0, 3200.0):  # the default window and either side of it
+        res = ssf.simulate(TWO_MODES, t_end, y0=TWO_MODES_START)
+        assert (res.status, res.period) == ("ok", 0), (t_end, res.status, res.period)
+        # the reading of rules 3 on the same points: period 1 at t_end 3000 and 3200
+        per = detect_period(res.poincare, len(res.poincare), res.settings.period_tol, 64)
+        assert per == (0 if t_end == 2500.0 else 1)
+    # stop="converged" reaches its cap unconverged and is judged there: the same reading
+    conv = ssf.simulate(TWO_MODES, 3000.0, y0=TWO_MODES_START, stop="converged")
+    assert np.isnan(conv.t_converged) and conv.period == 0
+
+
+def test_the_envelope_rule_on_constructed_points():
+    # two modes decaying at once about rest (x1 at 1.005, phi1 at 0.096 rad per unit time,
+    # as TWO_MODES), sampled once per fast period: period 1 by the tolerance, decay by the
+    # envelope; the same points with the decay taken out (a quasi-periodic ring of constant
+    # envelope) or converging onto an orbit of half the size are not refused
+    p = TWO_MODES.to_array()
+    x0, ph0 = rest_position(TWO_MODES.vb, p)
+    t = np.arange(480) * 2 * np.pi / 1.005
+    fast, slow = np.exp(-0.0017 * t), np.exp(-0.0030 * t)
+    beat = 1 + 0.3 * np.cos(0.096 * t)
+    rest = np.array([x0, 0.0, ph0, 0.0])
+
+    def points(envelope):
+        pts = np.tile(rest, (len(t), 1))
+        pts[:, 0] -= 0.15 * envelope * beat
+        pts[:, 2] += 0.05 * envelope * np.cos(0.096 * t)
+        return pts
+
+    args = (1e-5, p, 1, False)
+    decay = points(0.7 * fast + 0.3 * slow)
+    assert envelope_decays(decay, len(t), 1, *args)
+    assert not envelope_decays(points(np.ones_like(t)), len(t), 1, *args)
+    assert not envelope_decays(points(0.5 + 0.5 * fast), len(t), 1, *args)
+    # too few points for blocks of 4 periods: the rule says nothing
+    assert not envelope_decays(decay[-31:], 31, 1, *args)
+    # a ring buffer holds the last points: the same verdict from any rotation of it
+    rolled = np.roll(decay, 17, axis=0)
+    assert envelope_decays(rolled, len(t) + 17, 1, *args)
 
 
 def test_an_orbit_still_converging_keeps_its_period():

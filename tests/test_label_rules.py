@@ -8,7 +8,8 @@ that ends undecided looks past its end) act exactly where rules 1 said "unsettle
 ``classify``), so every other value ends where, and as, it did; rules 3 (a period
 refused for an oscillation dying out) only ever turn the period of an "ok" value into 0
 (``poincare.orbit_period`` returns ``detect_period``'s period or 0, and the status is
-decided before it).
+decided before it), and so do rules 4 (the same for two modes dying out at once,
+``poincare.envelope_decays``).
 """
 
 import hashlib
@@ -65,8 +66,11 @@ def test_only_the_labels_a_later_rule_acts_on_are_stale():
     assert not stale_labels(2, codes, none).any()
     assert codes[stale_labels(2, codes, some)].tolist() == [ST_OK]
     assert codes[stale_labels(2, codes)].tolist() == [ST_OK]  # periods unknown: any "ok"
+    # 3 -> 4: a period refused for two modes dying out at once
+    assert not stale_labels(3, codes, none).any()
+    assert codes[stale_labels(3, codes, some)].tolist() == [ST_OK]
     assert not stale_labels(LABEL_RULES, codes, some).any()
-    assert LABEL_RULES == 3
+    assert LABEL_RULES == 4
 
 
 def test_a_new_file_records_its_rules_and_an_older_one_without_stale_labels_resumes(tmp_path):
@@ -136,6 +140,24 @@ def test_an_older_file_whose_periods_the_rules_now_read_otherwise_is_refused(tmp
     np.testing.assert_array_equal(resumed.period, fresh.period)
     with h5py.File(old, "r") as h5:
         assert h5.attrs["label_rules"] == LABEL_RULES
+
+
+def test_a_rules_3_file_with_a_two_mode_decay_read_as_an_orbit_is_refused(tmp_path):
+    # rules 4 refuse the period of two modes dying out at once (poincare.envelope_decays):
+    # the random system of tests/test_decaying_oscillation.py, which rules 3 read as period 1
+    from test_decaying_oscillation import TWO_MODES, TWO_MODES_START
+
+    kw = dict(t_end=3000.0, y0=TWO_MODES_START, progress=False)
+    old = tmp_path / "old.h5"
+    fresh = ssf.sweep(TWO_MODES, "eta", [TWO_MODES.eta], out=old, **kw)
+    assert (fresh.status[0], fresh.period[0]) == ("ok", 0)
+    with h5py.File(old, "r+") as h5:
+        h5["period"][0] = 1  # what rules 3 stored: the same points, read otherwise
+    _as_if_older(old, rules=3, undone=())
+    before = _digest(old)
+    with pytest.raises(ConfigMismatchError, match=r"label_rules 3.*1 of its 1 finished values"):
+        ssf.sweep(TWO_MODES, "eta", [TWO_MODES.eta], out=old, **kw)
+    assert _digest(old) == before
 
 
 def test_the_periods_of_a_map_are_judged_with_each_cell_s_own_system(tmp_path):

@@ -55,13 +55,17 @@ ST_NOT_COMPUTED = -1
 #: 3. (2026-12-02) an "ok" run whose points repeat while they still drift towards the
 #:    rest state is an oscillation dying out: period 0, "none found"
 #:    (:func:`stickslip_fast.core.poincare.orbit_period`). Only "ok" runs with a period
-#:    can be labelled differently; their status stays "ok".
-LABEL_RULES = 3
+#:    can be labelled differently; their status stays "ok";
+#: 4. (2026-12-02, later) the same for two modes dying out at once, whose points change
+#:    unevenly from period to period: the envelope of the window's last points heads for
+#:    rest (:func:`stickslip_fast.core.poincare.envelope_decays`). Again only "ok" runs
+#:    with a period can be labelled differently.
+LABEL_RULES = 4
 #: The statuses that a finished run may have under older :data:`LABEL_RULES` and not
 #: under the current ones (see :func:`stale_labels`).
-LABELS_CHANGED_SINCE = {1: ("no-crossings", "unsettled"), 2: ()}
+LABELS_CHANGED_SINCE = {1: ("no-crossings", "unsettled"), 2: (), 3: ()}
 #: The rules after which an "ok" run with a period may have another period now.
-PERIODS_CHANGED_SINCE = frozenset({2})
+PERIODS_CHANGED_SINCE = frozenset({2, 3})
 
 #: Statuses for which a run has an orbit to report.
 ORBIT_STATUSES = ("ok",)

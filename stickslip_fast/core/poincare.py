@@ -126,11 +126,16 @@ def orbit_period(
     A slowly decaying oscillation about a stable equilibrium has x1 minima that change
     by less than ``tol`` per period long before it comes to rest: the fixed window then
     sees them repeat. Such a period is refused (0, "none found") when the points still
-    drift beyond ``tol`` and are heading for the rest state (:func:`decays_to_rest`).
+    drift beyond ``tol`` and are heading for the rest state: over the last two periods
+    (:func:`decays_to_rest`) or, for a decay of two modes at once, whose points change
+    unevenly from period to period, over the envelope of the window's last points
+    (:func:`envelope_decays`, label rules 4).
     ``p`` is the run's parameter array, ``n_osc`` its number of disks, ``dc`` its drive.
     """
     per = detect_period(points, count, tol, max_period)
     if per > 0 and decays_to_rest(points, count, per, tol, p, n_osc, dc):
+        return 0
+    if per > 0 and envelope_decays(points, count, per, tol, p, n_osc, dc):
         return 0
     return per
 
@@ -185,6 +190,74 @@ def decays_to_rest(
             to_rest_now = max(to_rest_now, abs(a[i] - rest_now))
             to_rest_limit = max(to_rest_limit, abs(lim - rest_lim))
     return to_rest_limit <= REST_LIMIT_FRACTION * to_rest_now
+
+
+#: :func:`envelope_decays` compares three blocks of this fraction of the recorded points
+#: each, the last ones: long enough to hold several beats of two modes decaying at once.
+ENVELOPE_BLOCK_FRACTION = 1.0 / 8.0
+#: ... and at least this many periods each (fewer points: the rule says nothing).
+ENVELOPE_MIN_PERIODS = 4
+
+
+@njit(**_JIT)
+def _distance_from_rest(a: np.ndarray, p: np.ndarray, n_osc: int, dc: bool) -> float:
+    """Max-norm distance of the point ``a`` from rest (as in :func:`decays_to_rest`): every
+    disk at :func:`~stickslip_fast.model.equations.rest_position` for the point's own belt
+    speed, speeds 0; NaN where there is no rest position (|k12| = 1)."""
+    x_rest, ph_rest = rest_position(a[4 * n_osc] if dc else p[P_VB], p)
+    if not math.isfinite(x_rest):
+        return math.nan
+    dist = 0.0
+    for i in range(4 * n_osc):
+        slot = i % 4
+        rest = x_rest if slot == 0 else (ph_rest if slot == 2 else 0.0)
+        dist = max(dist, abs(a[i] - rest))
+    return dist
+
+
+@njit(**_JIT)
+def envelope_decays(
+    points: np.ndarray, count: int, per: int, tol: float, p: np.ndarray, n_osc: int, dc: bool
+) -> bool:
+    """Whether points that repeat with period ``per`` are two modes dying out at once.
+
+    Where two modes of a disk ring together (x1 and phi1, coupled by k12), the slower
+    one's beat makes the points change unevenly from period to period, and the
+    extrapolation of :func:`decays_to_rest` over two periods does not see them head for
+    rest. Here the last three blocks of :data:`ENVELOPE_BLOCK_FRACTION` of the recorded
+    points each (whole periods, at least :data:`ENVELOPE_MIN_PERIODS`) give the envelope
+    A1, A2, A3: the largest distance from rest in each. Where it falls by more than
+    ``tol`` (scaled as in :func:`detect_period`), A1 > A2 > A3, its geometric (Aitken)
+    limit lies within :data:`REST_LIMIT_FRACTION` of A3: the points decay to rest. A
+    transient that converges onto an orbit heads for that orbit's own envelope
+    (limit / A3 >= 0.878 over the 3681 orbits of the full sweeps of Figs. 4, 6, 12, 14
+    and 16; docs/limits.md), a settled orbit has A1 = A2 = A3 within ``tol``.
+    """
+    cap = points.shape[0]
+    held = min(count, cap)
+    block = int(held * ENVELOPE_BLOCK_FRACTION) // per * per
+    if block < ENVELOPE_MIN_PERIODS * per:
+        return False
+    first = count - 3 * block
+    thr = tol * (1.0 + _max_abs(points, first, count))
+    a1 = a2 = a3 = 0.0  # scalars, not an array: the CUDA kernels call this on the device
+    for j in range(first, count):
+        d = _distance_from_rest(points[j % cap], p, n_osc, dc)
+        if not math.isfinite(d):
+            return False  # no rest position to head for: the period stands
+        if j < first + block:
+            a1 = max(a1, d)
+        elif j < first + 2 * block:
+            a2 = max(a2, d)
+        else:
+            a3 = max(a3, d)
+    if not (a1 - a3 > thr and a1 > a2 > a3):
+        return False
+    r = (a2 - a3) / (a1 - a2)
+    if r >= 1.0:
+        return False
+    limit = a3 - (a2 - a3) * r / (1.0 - r)
+    return limit <= REST_LIMIT_FRACTION * a3
 
 
 @njit(**_JIT)
