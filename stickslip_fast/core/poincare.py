@@ -226,12 +226,13 @@ def envelope_decays(
     extrapolation of :func:`decays_to_rest` over two periods does not see them head for
     rest. Here the last three blocks of :data:`ENVELOPE_BLOCK_FRACTION` of the recorded
     points each (whole periods, at least :data:`ENVELOPE_MIN_PERIODS`) give the envelope
-    A1, A2, A3: the largest distance from rest in each. Where it falls by more than
-    ``tol`` (scaled as in :func:`detect_period`), A1 > A2 > A3, its geometric (Aitken)
-    limit lies within :data:`REST_LIMIT_FRACTION` of A3: the points decay to rest. A
-    transient that converges onto an orbit heads for that orbit's own envelope
-    (limit / A3 >= 0.878 over the 3681 orbits of the full sweeps of Figs. 4, 6, 12, 14
-    and 16; docs/limits.md), a settled orbit has A1 = A2 = A3 within ``tol``.
+    A1, A2, A3: the largest distance from rest in each. The points decay to rest where
+    the envelope falls by more than ``tol`` (scaled as in :func:`detect_period`), with
+    A1 > A2 > A3, and its geometric (Aitken) limit lies within
+    :data:`REST_LIMIT_FRACTION` of A3. A transient that converges onto an orbit heads
+    for that orbit's own envelope (limit / A3 >= 0.878 over the 3681 orbits of the full
+    sweeps of Figs. 4, 6, 12, 14 and 16; docs/limits.md); a settled orbit has
+    A1 = A2 = A3 within ``tol``.
     """
     cap = points.shape[0]
     held = min(count, cap)
