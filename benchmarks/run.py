@@ -22,6 +22,7 @@ from benchmarks import (  # noqa: E402
     peer_diagram,
     peer_precision,
     profile_kernel,
+    speed_targets,
     startup,
     sweeps,
     tableaus,
@@ -42,6 +43,9 @@ SECTIONS = (
     "kernel_profile",
     "converged_stopping",
     "tableaus",
+    "first_run",
+    "auto_tolerance_rules",
+    "multirate_bound",
 )
 
 
@@ -103,6 +107,10 @@ def main(argv=None):
         ("kernel_profile", lambda: profile_kernel.run(mode, log)),
         ("converged_stopping", lambda: converged.run(mode, log)),
         ("tableaus", lambda: tableaus.run(mode, log)),
+        # issue 30's targets with their floors (summary_targets.py); full run only
+        ("first_run", lambda: speed_targets.first_run_section(mode, log)),
+        ("auto_tolerance_rules", lambda: speed_targets.auto_section(mode, log)),
+        ("multirate_bound", lambda: speed_targets.multirate_section(mode, log)),
     ]
     failed = []
     for name, fn in plan:

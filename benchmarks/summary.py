@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import summary_peers
+from . import summary_peers, summary_targets
 
 
 def _f(x, fmt="{:.3g}"):
@@ -142,6 +142,7 @@ def write_summary(r):
                     f"| {_verdict(g, 1.0, higher_is_better=False)} |"
                 )
     L.append("")
+    L += summary_targets.rows(sec)
     L += summary_peers.readme_rows(r)
 
     if wp:
