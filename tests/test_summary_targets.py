@@ -73,6 +73,10 @@ def test_each_target_with_its_verdict_and_floor():
     assert "`_run` alone compiles in 13.0 s (its records' setup 2.5 s more)" in first[4]
     job = _row(lines, "| README's main job")
     assert job[1:4] == ["22.0 s (21.0 s CPU)", "<= 25 s", "**met**"]
+    assert (
+        job[4]
+        == "the cached job takes 9.0 s; with `_run`'s compile above it cannot take less than 22.0 s"
+    )
     a6 = _row(lines, "| `auto` vs numbalsoda LSODA, eta = 2, points within 1e-06")
     assert a6[1:4] == ["2.19x / 2.60x", ">= 3x", "**missed** / **missed**"]
     assert "3.18x; the driver adds 1.22x" in a6[4]
