@@ -94,9 +94,9 @@ def _disk_rows(ns: dict | None, mr: dict | None) -> list[str]:
         o = last["oracle"]
         why = (f"a partition with v_b known (the oracle) takes "
                f"{o['steps_per_disk_rel_first']:.2f}x the steps per disk at N = {last['N']} "
-               f"as at N = {first['N']}, but costs {1 / last['break_even_passes']:.2f}x the "
-               f"monolithic run in one pass ({1 / last['break_even_passes_at_floor']:.2f}x "
-               "at the cheapest disk step)")  # fmt: skip
+               f"as at N = {first['N']}, and one such pass costs "
+               f"{1 / last['break_even_passes']:.2f}x the monolithic run "
+               f"({1 / last['break_even_passes_at_floor']:.2f}x at the cheapest disk step)")  # fmt: skip
         rel = last.get("relaxation")
         if rel:
             why += (
