@@ -142,7 +142,7 @@ def write_summary(r):
                     f"| {_verdict(g, 1.0, higher_is_better=False)} |"
                 )
     L.append("")
-    L += summary_targets.rows(sec)
+    L += summary_targets.rows(sec, _verdict)
     L += summary_peers.readme_rows(r)
 
     if wp:

@@ -16,14 +16,7 @@ def _ok(section) -> bool:
     return bool(section) and section.get("status") == "ok"
 
 
-def _verdict(value, target, higher_is_better=True) -> str:
-    if value is None:
-        return "n/a"
-    ok = value >= target if higher_is_better else value <= target
-    return "**met**" if ok else "**missed**"
-
-
-def _first_run_rows(fr: dict) -> list[str]:
+def _first_run_rows(fr: dict, verdict) -> list[str]:
     jobs = fr["jobs_result"]
     L = []
     sim, floor, job = (jobs.get(k) for k in ("first_simulate", "driver_floor", "readme_main_job"))
@@ -41,7 +34,7 @@ def _first_run_rows(fr: dict) -> list[str]:
         L.append(
             f"| first `simulate`, empty cache (median of {len(sim['cold']['runs'])}; cached "
             f"{sim['cached']['wall_s']:.1f} s) | {wall:.1f} s ({cpu:.1f} s CPU) | <= 10 s "
-            f"| {_verdict(wall, 10.0, False)} | {why} |"
+            f"| {verdict(wall, 10.0, False)} | {why} |"
         )
     if job:
         wall, cpu = job["cold"]["median_wall_s"], job["cold"]["median_cpu_s"]
@@ -53,12 +46,12 @@ def _first_run_rows(fr: dict) -> list[str]:
         L.append(
             f"| README's main job (`stickslip-fast sweep` of Fig. 6), empty cache (cached "
             f"{cached:.1f} s) | {wall:.1f} s ({cpu:.1f} s CPU) | <= 25 s "
-            f"| {_verdict(wall, 25.0, False)} | {why} |"
+            f"| {verdict(wall, 25.0, False)} | {why} |"
         )
     return L
 
 
-def _auto_rows(au: dict) -> list[str]:
+def _auto_rows(au: dict, verdict) -> list[str]:
     L = []
     for eta, case in au["cases"].items():
         for tgt, table in case["tables"].items():
@@ -78,12 +71,12 @@ def _auto_rows(au: dict) -> list[str]:
             L.append(
                 f"| `auto` vs numbalsoda LSODA, eta = {eta}, points within {tgt}: fair rule / "
                 f"each at its best rule | {fair_txt} / {ratio:.2f}x | >= {goal:g}x "
-                f"| {_verdict(fair, goal)} / {_verdict(ratio, goal)} | {why} |"
+                f"| {verdict(fair, goal)} / {verdict(ratio, goal)} | {why} |"
             )
     return L
 
 
-def _disk_rows(ns: dict | None, mr: dict | None) -> list[str]:
+def _disk_rows(ns: dict | None, mr: dict | None, verdict) -> list[str]:
     if not ns or ns.get("worst_cost_per_N_rel_N8") is None:
         return []
     worst = ns["worst_cost_per_N_rel_N8"]
@@ -106,12 +99,16 @@ def _disk_rows(ns: dict | None, mr: dict | None) -> list[str]:
             )
     return [
         f"| cost per disk, desynchronised disks on a DC motor, N = 8 .. {nmax} (`n_scaling`) "
-        f"| {worst:.2f}x | <= 1.5x | {_verdict(worst, 1.5, False)} | {why} |"
+        f"| {worst:.2f}x | <= 1.5x | {verdict(worst, 1.5, False)} | {why} |"
     ]
 
 
-def rows(sec: dict) -> list[str]:
-    """The markdown section: a table of issue 30's targets, or nothing if none was run."""
+def rows(sec: dict, verdict) -> list[str]:
+    """The markdown section: a table of issue 30's targets, or nothing if none was run.
+
+    ``verdict(value, target, higher_is_better=True)`` words a comparison with its target
+    (``summary._verdict``, the headline table's).
+    """
     fr, au, mr = (sec.get(k) for k in ("first_run", "auto_tolerance_rules", "multirate_bound"))
     if not any(_ok(s) for s in (fr, au, mr)):
         return []
@@ -125,8 +122,8 @@ def rows(sec: dict) -> list[str]:
         "|---|---|---|---|---|",
     ]
     if _ok(fr):
-        L += _first_run_rows(fr)
+        L += _first_run_rows(fr, verdict)
     if _ok(au):
-        L += _auto_rows(au)
-    L += _disk_rows(sec.get("n_scaling"), mr)
+        L += _auto_rows(au, verdict)
+    L += _disk_rows(sec.get("n_scaling"), mr, verdict)
     return L + [""]

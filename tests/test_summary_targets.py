@@ -13,6 +13,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import summary_targets  # noqa: E402
+from benchmarks.summary import _verdict  # noqa: E402
 
 
 def _cold(*walls, **extra):
@@ -66,25 +67,25 @@ def _row(lines, start):
 
 
 def test_each_target_with_its_verdict_and_floor():
-    lines = summary_targets.rows(_sections())
+    lines = summary_targets.rows(_sections(), _verdict)
     assert lines[0] == "## Issue 30: the speed targets and their floors"
     first = _row(lines, "| first `simulate`")
-    assert first[1:4] == ["29.0 s (28.0 s CPU)", "<= 10 s", "**missed**"]
+    assert first[1:4] == ["29.0 s (28.0 s CPU)", "<= 10 s", "**miss** (2.9x short)"]
     assert "`_run` alone compiles in 13.0 s (its records' setup 2.5 s more)" in first[4]
     job = _row(lines, "| README's main job")
-    assert job[1:4] == ["22.0 s (21.0 s CPU)", "<= 25 s", "**met**"]
+    assert job[1:4] == ["22.0 s (21.0 s CPU)", "<= 25 s", "**pass**"]
     assert (
         job[4]
         == "the cached job takes 9.0 s; with `_run`'s compile above it cannot take less than 22.0 s"
     )
     a6 = _row(lines, "| `auto` vs numbalsoda LSODA, eta = 2, points within 1e-06")
-    assert a6[1:4] == ["2.19x / 2.60x", ">= 3x", "**missed** / **missed**"]
+    assert a6[1:4] == ["2.19x / 2.60x", ">= 3x", "**miss** (1.4x short) / **miss** (1.2x short)"]
     assert "3.18x; the driver adds 1.22x" in a6[4]
     a8 = _row(lines, "| `auto` vs numbalsoda LSODA, eta = 2, points within 1e-08")
-    assert a8[1:4] == ["3.34x / 2.26x", ">= 2x", "**met** / **met**"]
+    assert a8[1:4] == ["3.34x / 2.26x", ">= 2x", "**pass** / **pass**"]
     assert a8[4] == "—"  # no floor measured for that pick
     disk = _row(lines, "| cost per disk")
-    assert disk[1:4] == ["2.73x", "<= 1.5x", "**missed**"]
+    assert disk[1:4] == ["2.73x", "<= 1.5x", "**miss** (1.8x short)"]
     assert "1.10x the steps per disk at N = 512 as at N = 8" in disk[4]
     assert (
         "one such pass costs 2.00x the monolithic run (1.25x at the cheapest disk step)" in disk[4]
@@ -96,4 +97,4 @@ def test_no_section_when_the_targets_were_skipped():
     skipped = dict(status="skipped", why="full run only")
     sec = dict(first_run=skipped, auto_tolerance_rules=skipped, multirate_bound=skipped,
                n_scaling=dict(worst_cost_per_N_rel_N8=2.0, rows=[dict(N=512)]))  # fmt: skip
-    assert summary_targets.rows(sec) == []
+    assert summary_targets.rows(sec, _verdict) == []
