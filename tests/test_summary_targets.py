@@ -25,6 +25,7 @@ def _cold(*walls, **extra):
 def _sections():
     first_run = dict(
         status="ok",
+        targets=dict(first_simulate_cold_s=10.0, readme_main_job_cold_s=25.0),
         jobs_result=dict(
             first_simulate=dict(cold=_cold(28.0, 30.0), cached=dict(wall_s=1.2)),
             driver_floor=dict(
