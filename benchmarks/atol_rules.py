@@ -16,9 +16,9 @@ the rule. So here every solver gets the same choice:
   cheapest by the ladder's time (best of 5);
 - the picks then timed again alternating, best of ``rounds`` per solver, as the fair
   benchmark does (an untimed run of the same solver before each timed one);
-- for ``auto``'s best pick, the floor of :mod:`benchmarks.autoswitch_floor`: its
-  attempted steps of each method at the bare cost of one attempt, what the run would
-  cost with a free driver, and LSODA's time over it.
+- for ``auto``'s picks (the benchmark's rule and the best rule), the floor of
+  :mod:`benchmarks.autoswitch_floor`: its attempted steps of each method at the bare cost
+  of one attempt, what the run would cost with a free driver, and LSODA's time over it.
 
 Solvers: the engine's ``rodas5p`` and ``auto``, and numbalsoda's LSODA (its own
 finite-difference Jacobian). Cases: the asymmetric preset on a constant belt, eta = 2.0
@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import itertools
 import math
 import time
 from pathlib import Path
@@ -157,16 +158,16 @@ def case(eta: float, rounds: int, log, n_loop: int = autoswitch_floor.N_LOOP) ->
                 for n, r in rows.items()))  # fmt: skip
         tables[f"{target:g}"] = table
     bare = autoswitch_floor.bare_costs(log, eta, n_loop, autoswitch_floor.REPEATS)
-    for target, table in tables.items():
-        row = table["best_rule"].get("auto")
+    for (target, table), label in itertools.product(tables.items(), ("benchmark_rule", "best_rule")):
+        row = table[label].get("auto")
         if row is None:
             continue
         row.update(floor(eta, row, bare))
-        peer = table["best_rule"].get(PEER, {}).get("time")
+        peer = table[label].get(PEER, {}).get("time")
         if peer:
             row["speedup_vs_peer_at_floor"] = peer / row["floor"]
         log(
-            f"  eta {eta} target {target}: auto {row['time'] * 1e3:.2f} ms, floor "
+            f"  eta {eta} target {target}, {label}: auto {row['time'] * 1e3:.2f} ms, floor "
             f"{row['floor'] * 1e3:.2f} ms ({row['auto_over_floor']:.2f}x)"
             + (f", LSODA over the floor {row['speedup_vs_peer_at_floor']:.2f}x" if peer else "")
         )

@@ -14,7 +14,7 @@ floor come from one run on one machine (``summary_targets.py`` tabulates them):
     :mod:`benchmarks.atol_rules` at eta = 2.0 and 9.99: ``method="auto"`` against
     numbalsoda's LSODA at matched accuracy (points within 1e-6 and 1e-8 of the Radau
     reference), with the fair benchmark's one tolerance rule and with each solver at its
-    best rule, and ``auto``'s floor at its best pick (its attempts at the bare cost of an
+    best rule, and ``auto``'s floor at both picks (its attempts at the bare cost of an
     attempt: a free driver). The targets: >= 3x at 1e-6, >= 2x at 1e-8.
 ``multirate_bound``
     :mod:`benchmarks.multirate_bound` with its defaults (N = 8 ... 512 desynchronised

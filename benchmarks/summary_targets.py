@@ -53,22 +53,37 @@ def _first_run_rows(fr: dict, verdict) -> list[str]:
     return L
 
 
+def _auto_floor_text(fair: dict, best: dict, goal: float) -> str:
+    """What a free driver would give: each pick's attempts at the bare cost of one.
+
+    Runs before the fair rule's floor was measured hold the best rule's alone.
+    """
+    best_floor = best.get("speedup_vs_peer_at_floor")
+    if best_floor is None:
+        return "—"
+    head = "with a driver that cost nothing (its attempts at the bare cost of one)"
+    fair_floor = fair.get("speedup_vs_peer_at_floor")
+    if fair_floor is None:
+        return f"{head} {best_floor:.2f}x; the driver adds {best['auto_over_floor']:.2f}x"
+    text = (f"{head}: fair rule {fair_floor:.2f}x / best rule {best_floor:.2f}x; the driver "
+            f"adds {fair['auto_over_floor']:.2f}x / {best['auto_over_floor']:.2f}x")  # fmt: skip
+    if fair_floor < goal:
+        text += f"; with the fair rule `auto`'s own steps cannot reach {goal:g}x"
+    return text
+
+
 def _auto_rows(au: dict, verdict) -> list[str]:
     L = []
     for eta, case in au["cases"].items():
         for tgt, table in case["tables"].items():
             goal = GOALS.get(tgt)
-            fair = table.get("benchmark_rule", {}).get("auto", {}).get("speedup_vs_peer")
+            fair_row = table.get("benchmark_rule", {}).get("auto", {})
+            fair = fair_row.get("speedup_vs_peer")
             best = table.get("best_rule", {}).get("auto", {})
             ratio = best.get("speedup_vs_peer")
-            at_floor = best.get("speedup_vs_peer_at_floor")
             if goal is None or ratio is None:
                 continue
-            why = "—"
-            if at_floor is not None:
-                why = (f"with a driver that cost nothing (its attempts at the bare cost of "
-                       f"one) {at_floor:.2f}x; the driver adds "
-                       f"{best['auto_over_floor']:.2f}x")  # fmt: skip
+            why = _auto_floor_text(fair_row, best, goal)
             fair_txt = "n/a" if fair is None else f"{fair:.2f}x"
             L.append(
                 f"| `auto` vs numbalsoda LSODA, eta = {eta}, points within {tgt}: fair rule / "

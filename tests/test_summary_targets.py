@@ -38,12 +38,18 @@ def _sections():
         ),
     )
     auto_row = dict(speedup_vs_peer=2.6, speedup_vs_peer_at_floor=3.18, auto_over_floor=1.22)
+    fair_row = dict(speedup_vs_peer=2.19, speedup_vs_peer_at_floor=2.74, auto_over_floor=1.25)
     auto = dict(
         status="ok",
         cases={"2": dict(tables={
-            "1e-06": dict(benchmark_rule=dict(auto=dict(speedup_vs_peer=2.19)), best_rule=dict(auto=auto_row)),
+            "1e-06": dict(benchmark_rule=dict(auto=fair_row), best_rule=dict(auto=auto_row)),
             "1e-08": dict(benchmark_rule=dict(auto=dict(speedup_vs_peer=3.34)),
                           best_rule=dict(auto=dict(speedup_vs_peer=2.26))),
+        }),
+        # a run made before the fair rule's floor was measured: the best rule's alone
+        "9.99": dict(tables={
+            "1e-06": dict(benchmark_rule=dict(auto=dict(speedup_vs_peer=3.1)),
+                          best_rule=dict(auto=dict(auto_row, speedup_vs_peer_at_floor=4.4))),
         })},
     )  # fmt: skip
     oracle = dict(steps_per_disk_rel_first=1.1)
@@ -81,7 +87,17 @@ def test_each_target_with_its_verdict_and_floor():
     )
     a6 = _row(lines, "| `auto` vs numbalsoda LSODA, eta = 2, points within 1e-06")
     assert a6[1:4] == ["2.19x / 2.60x", ">= 3x", "**miss** (1.4x short) / **miss** (1.2x short)"]
-    assert "3.18x; the driver adds 1.22x" in a6[4]
+    assert a6[4] == (
+        "with a driver that cost nothing (its attempts at the bare cost of one): fair rule "
+        "2.74x / best rule 3.18x; the driver adds 1.25x / 1.22x; with the fair rule `auto`'s "
+        "own steps cannot reach 3x"
+    )
+    old_run = _row(lines, "| `auto` vs numbalsoda LSODA, eta = 9.99, points within 1e-06")
+    assert old_run[1:4] == ["3.10x / 2.60x", ">= 3x", "**pass** / **miss** (1.2x short)"]
+    assert old_run[4] == (
+        "with a driver that cost nothing (its attempts at the bare cost of one) 4.40x; "
+        "the driver adds 1.22x"
+    )
     a8 = _row(lines, "| `auto` vs numbalsoda LSODA, eta = 2, points within 1e-08")
     assert a8[1:4] == ["3.34x / 2.26x", ">= 2x", "**pass** / **pass**"]
     assert a8[4] == "—"  # no floor measured for that pick
