@@ -158,7 +158,8 @@ def case(eta: float, rounds: int, log, n_loop: int = autoswitch_floor.N_LOOP) ->
                 for n, r in rows.items()))  # fmt: skip
         tables[f"{target:g}"] = table
     bare = autoswitch_floor.bare_costs(log, eta, n_loop, autoswitch_floor.REPEATS)
-    for (target, table), label in itertools.product(tables.items(), ("benchmark_rule", "best_rule")):
+    picks = itertools.product(tables.items(), ("benchmark_rule", "best_rule"))
+    for (target, table), label in picks:
         row = table[label].get("auto")
         if row is None:
             continue
