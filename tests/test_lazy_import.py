@@ -1,0 +1,72 @@
+"""``import stickslip_fast`` loads what a first ``simulate`` needs; the rest on first use.
+
+The package's ``__getattr__`` (PEP 562) imports the orbit, census, basin and Lyapunov
+names when they are first used, so a process that only simulates starts sooner
+(docs/performance.md, "The cached start").
+"""
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import stickslip_fast as ssf
+
+INIT = Path(ssf.__file__)
+
+PROBE = """
+import sys
+import stickslip_fast as ssf
+before = sorted(m for m in sys.modules if m.startswith("stickslip_fast"))
+ssf.simulate  # imported at once
+orbit = ssf.find_orbit  # imported now
+after = sorted(m for m in sys.modules if m.startswith("stickslip_fast"))
+print(repr((before, after, orbit.__module__)))
+"""
+
+
+def test_a_plain_import_leaves_the_bifurcation_layer_unloaded_until_used():
+    out = subprocess.run(
+        [sys.executable, "-c", PROBE], capture_output=True, text=True, check=True, timeout=120
+    )
+    before, after, module = ast.literal_eval(out.stdout.strip().splitlines()[-1])
+    assert "stickslip_fast.analysis.simulate" in before
+    assert not [m for m in before if m.startswith("stickslip_fast.bifurcation")]
+    assert "stickslip_fast.analysis.basins" not in before
+    assert "stickslip_fast.bifurcation.orbits" in after and module.endswith("bifurcation.orbits")
+
+
+def test_every_public_name_resolves_and_is_listed():
+    for name in ssf.__all__:
+        assert getattr(ssf, name) is not None, name
+        assert name in dir(ssf), name
+    from stickslip_fast.analysis.census import census
+    from stickslip_fast.bifurcation.orbits import find_orbit
+
+    assert ssf.census is census and ssf.find_orbit is find_orbit
+
+
+def test_an_unknown_name_is_an_attribute_error_naming_it():
+    with pytest.raises(AttributeError, match="'no_such_name'"):
+        ssf.no_such_name  # noqa: B018
+    assert not hasattr(ssf, "sweep_kernels")
+
+
+def test_the_lazy_table_and_the_type_checking_imports_name_the_same_things():
+    tree = ast.parse(INIT.read_text())
+    block = next(
+        node
+        for node in tree.body
+        if isinstance(node, ast.If) and getattr(node.test, "id", None) == "TYPE_CHECKING"
+    )
+    typed = {
+        ("." * imp.level + (imp.module or ""), alias.name)
+        for imp in block.body
+        for alias in imp.names
+    }
+    lazy = {(module, name) for name, module in ssf._LAZY.items()}
+    assert typed == lazy
+    eager = set(ssf.__all__) - set(ssf._LAZY) - {"__version__"}
+    assert eager <= set(vars(ssf))  # the rest is imported with the package
