@@ -105,8 +105,20 @@ if TYPE_CHECKING:  # the same names, for type checkers and editors
     from .bifurcation.synchrony import SyncStability, sync_stability
 
 
+#: The layers, reachable as attributes as when every public name was imported eagerly.
+_SUBPACKAGES = ("analysis", "backends", "base", "bifurcation", "cli", "core", "io", "model")
+
+
 def __getattr__(name: str):
-    """Import a public name of :data:`_LAZY` on first use and keep it (PEP 562)."""
+    """Import a public name of :data:`_LAZY` on first use and keep it (PEP 562).
+
+    A layer (``stickslip_fast.bifurcation``) imports every module behind the public names
+    first, so ``stickslip_fast.bifurcation.orbits`` works as it did before.
+    """
+    if name in _SUBPACKAGES:
+        for module in _LAZY_MODULES:
+            importlib.import_module(module, __name__)
+        return importlib.import_module("." + name, __name__)
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -70,3 +70,14 @@ def test_the_lazy_table_and_the_type_checking_imports_name_the_same_things():
     assert typed == lazy
     eager = set(ssf.__all__) - set(ssf._LAZY) - {"__version__"}
     assert eager <= set(vars(ssf))  # the rest is imported with the package
+
+
+def test_a_layer_reached_as_an_attribute_holds_the_modules_it_held_before():
+    code = (
+        "import stickslip_fast as ssf; "
+        "print(ssf.bifurcation.orbits.return_map.__module__, ssf.cli.__name__)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.split() == ["stickslip_fast.bifurcation.returnmap", "stickslip_fast.cli"]
