@@ -35,7 +35,8 @@ TRAJECTORIES = {
         ),
     ],
     # the CI smoke test's: windows of 30, 80 and 150 time units after a transient of 100
-    # (the same points for every solver), so the section runs in ~15 s, not ~40 s
+    # (the same points for every solver): the section took 22 s against 33 s with a
+    # transient of 300-1000 (one quick run each; ~7 s of it numbalsoda compiling at import)
     "quick": [
         dict(key="asymmetric_eta2.0", preset="asymmetric", eta=2.0, t_end=130.0, t_transient=100.0),
         dict(

@@ -35,7 +35,7 @@ from .core.settings import CoarseToleranceWarning
 from .core.trajectory import METHODS
 from .model.system import PRESETS, SWEEPABLE, SynchronousStartWarning, System
 
-#: The public names imported on first use, by the module that defines them.
+#: The public names imported on first use, by the module they are imported from.
 _LAZY_MODULES = {
     ".analysis": (
         "LyapunovResult",

@@ -2,7 +2,7 @@
 
 The package's ``__getattr__`` (PEP 562) imports the orbit, census, basin and Lyapunov
 names when they are first used, so a process that only simulates starts sooner
-(docs/performance.md, "The cached start").
+(docs/performance.md, "Against the code the issue was filed on, and the cached start").
 """
 
 import ast
