@@ -81,3 +81,40 @@ def test_a_layer_reached_as_an_attribute_holds_the_modules_it_held_before():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert out.stdout.split() == ["stickslip_fast.bifurcation.returnmap", "stickslip_fast.cli"]
+
+
+THREADS = """
+import threading
+import stickslip_fast as ssf
+names = ["census", "find_orbit", "basins", "largest_lyapunov", "sync_stability", "sweep"]
+barrier, out = threading.Barrier(len(names)), {}
+
+def first_use(name):
+    barrier.wait()
+    try:
+        out[name] = getattr(ssf, name).__module__
+    except BaseException as exc:
+        out[name] = repr(exc)
+
+threads = [threading.Thread(target=first_use, args=(n,)) for n in names]
+[t.start() for t in threads]
+[t.join() for t in threads]
+print(repr(out))
+"""
+
+
+def test_public_names_first_used_by_several_threads_at_once():
+    # each first use imports its module in the thread that asks: six at once must each
+    # get their function, not an ImportError from a module another thread is importing
+    out = subprocess.run(
+        [sys.executable, "-c", THREADS], capture_output=True, text=True, check=True, timeout=120
+    )
+    modules = ast.literal_eval(out.stdout.strip().splitlines()[-1])
+    assert modules == {
+        "census": "stickslip_fast.analysis.census",
+        "find_orbit": "stickslip_fast.bifurcation.orbits",
+        "basins": "stickslip_fast.analysis.basins",
+        "largest_lyapunov": "stickslip_fast.analysis.lyapunov",
+        "sync_stability": "stickslip_fast.bifurcation.synchrony",
+        "sweep": "stickslip_fast.analysis.sweep",
+    }, out.stderr
