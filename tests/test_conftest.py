@@ -6,18 +6,19 @@ import sys
 from pathlib import Path
 
 import conftest
+import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "stickslip_fast"
 TESTS = Path(__file__).resolve().parent
 
 # In a fresh interpreter, as in xdist's controller: two threads (one per worker channel)
-# rebuild two of the package's warnings at the same moment, after the conftest's hook
-# has imported their modules in the main thread.
+# rebuild two of the package's warnings at the same moment, after one of the conftest's
+# two guards: their modules imported in the main thread first, or the rebuilds in turn.
 RACE = f"""
 import sys, threading, warnings
 sys.path.insert(0, {str(TESTS)!r})
 from xdist.remote import serialize_warning_message
-from xdist.workermanage import unserialize_warning_message
+from xdist import workermanage
 
 def data(module, name, *args):
     cls = type(name, (UserWarning,), {{"__module__": module}})
@@ -26,15 +27,17 @@ def data(module, name, *args):
 
 reports = [data("stickslip_fast.core.settings", "CoarseToleranceWarning", "atol"),
            data("stickslip_fast.model.system", "SynchronousStartWarning", "y0")]
-if sys.argv[1] == "configured":
-    import conftest
+import conftest
+if sys.argv[1] == "imported":
     conftest.import_warning_modules()
+elif sys.argv[1] == "in turn":
+    conftest.rebuild_warnings_one_at_a_time()
 barrier, out = threading.Barrier(2), []
 
 def rebuild(report):
     barrier.wait()
     try:
-        out.append(unserialize_warning_message(report).category.__module__)
+        out.append(workermanage.unserialize_warning_message(report).category.__module__)
     except BaseException as exc:
         out.append(repr(exc))
 
@@ -68,11 +71,12 @@ def test_every_warning_class_of_the_package_is_imported_before_the_workers_start
     assert not missing, f"add their modules to tests/conftest.py's WARNING_MODULES: {missing}"
 
 
-def test_two_workers_warnings_rebuilt_at_once_by_the_controller():
-    # without the hook this failed every time on this VM (6 of 6): "cannot import name
+@pytest.mark.parametrize("guard", ["imported", "in turn"])
+def test_two_workers_warnings_rebuilt_at_once_by_the_controller(guard):
+    # with neither guard this failed every time on this VM (6 of 6): "cannot import name
     # 'warn_if_coarse_atol' from partially initialized module 'stickslip_fast.core.settings'"
     out = subprocess.run(
-        [sys.executable, "-c", RACE, "configured"],
+        [sys.executable, "-c", RACE, guard],
         capture_output=True, text=True, check=True, timeout=300,
     )  # fmt: skip
     assert out.stdout.strip() == repr(
