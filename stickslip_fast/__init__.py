@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 # What a first ``simulate`` needs is imported now; the rest on first use (PEP 562,
 # ``__getattr__`` below): a process that only simulates starts ~0.2 s sooner.
 from .analysis.simulate import DEFAULT_ATOL, DEFAULT_RTOL, SimulationResult, simulate
+from .base.lazy import submodule_getattr
 from .base.version import package_version
 from .core.poincare import STATUS_NAMES
 from .core.settings import CoarseToleranceWarning
@@ -105,23 +106,16 @@ if TYPE_CHECKING:  # the same names, for type checkers and editors
     from .bifurcation.synchrony import SyncStability, sync_stability
 
 
-#: The layers, reachable as attributes as when every public name was imported eagerly.
-_SUBPACKAGES = ("analysis", "backends", "base", "bifurcation", "cli", "core", "io", "model")
+#: A layer not yet imported (``stickslip_fast.bifurcation``), imported on first use; each
+#: layer does the same for its own submodules (base/lazy.py).
+_submodule = submodule_getattr(__name__)
 
 
 def __getattr__(name: str):
-    """Import a public name of :data:`_LAZY` on first use and keep it (PEP 562).
-
-    A layer (``stickslip_fast.bifurcation``) imports every module behind the public names
-    first, so ``stickslip_fast.bifurcation.orbits`` works as it did before.
-    """
-    if name in _SUBPACKAGES:
-        for module in _LAZY_MODULES:
-            importlib.import_module(module, __name__)
-        return importlib.import_module("." + name, __name__)
+    """Import a public name of :data:`_LAZY`, or a layer, on first use and keep it (PEP 562)."""
     module = _LAZY.get(name)
     if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        return _submodule(name)
     value = getattr(importlib.import_module(module, __name__), name)
     globals()[name] = value
     return value

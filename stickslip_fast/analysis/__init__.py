@@ -29,3 +29,7 @@ __all__ = [
     "sync_error",
     "wrap_phase",
 ]
+
+from ..base.lazy import submodule_getattr
+
+__getattr__ = submodule_getattr(__name__)  # submodules as attributes on first use

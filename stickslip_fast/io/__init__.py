@@ -138,3 +138,7 @@ __all__ = [
     "read_census",
     "write_census_classification",
 ]
+
+from ..base.lazy import submodule_getattr
+
+__getattr__ = submodule_getattr(__name__)  # submodules as attributes on first use
